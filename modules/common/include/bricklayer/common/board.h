@@ -1,0 +1,28 @@
+// Board geometry in rectified board pixels, for a camera looking straight at the board (or after
+// calibration's rectification): where the surface edge and top are, and how big a block is.
+// This is the --board FILE of bricklayer-vision and the layout simcam renders.
+#pragma once
+
+#include <string>
+
+namespace bricklayer {
+
+struct BoardGeometry {
+  double edge_x_px = 320.0;       // pixel column of the surface edge
+  double surface_y_px = 440.0;    // pixel row of the surface top (rows grow downwards)
+  double block_length_px = 60.0;  // a block's length in pixels
+  double block_height_px = 20.0;  // a block's height in pixels
+
+  // Board coordinates (block lengths, x right from the edge, y up from the surface) <-> pixels.
+  double to_px_x(double x_blocks) const { return edge_x_px + x_blocks * block_length_px; }
+  double to_px_y(double y_blocks) const { return surface_y_px - y_blocks * block_length_px; }
+  double from_px_x(double u) const { return (u - edge_x_px) / block_length_px; }
+  double row_top_px(int row) const { return surface_y_px - (row + 1) * block_height_px; }
+};
+
+// Reads {"edge_x_px":..,"surface_y_px":..,"block_length_px":..,"block_height_px":..}.
+// Throws std::runtime_error naming the missing/unknown key or bad value (every key is required).
+BoardGeometry load_board_geometry(const std::string& path);
+BoardGeometry parse_board_geometry(const std::string& json_text);
+
+}  // namespace bricklayer

@@ -1,0 +1,25 @@
+// Channel names of the Bricklayer bus, in one place so every process and tool agrees.
+// A deployment may prefix every channel (BRICKLAYER_CHANNEL_PREFIX) to share a network with another
+// exhibit; use channel() rather than the bare constants when publishing or subscribing.
+#pragma once
+
+#include <string>
+
+namespace bricklayer {
+
+inline constexpr const char* kImageChannel = "BL_IMAGE";            // image_t, camera/simcam -> vision
+inline constexpr const char* kStackChannel = "BL_STACK";            // stack_t, vision -> prediction
+inline constexpr const char* kPredictionChannel = "BL_PREDICTION";  // prediction_t, prediction -> projection
+inline constexpr const char* kTimingChannel = "BL_TIMING";          // timing_t, any module
+inline constexpr const char* kHeartbeatChannel = "BL_HEARTBEAT";    // heartbeat_t, every module, 1 Hz
+inline constexpr const char* kCommandChannel = "BL_COMMAND";        // command_t, operator/tools -> modules
+inline constexpr const char* kCalibrationChannel = "BL_CALIBRATION";  // calibration_t
+inline constexpr const char* kRoundChannel = "BL_ROUND";            // round_t, projection
+inline constexpr const char* kProjectorChannel = "BL_PROJECTOR";    // projector_state_t, projection -> simcam, calibration
+inline constexpr const char* kPreviewChannel = "BL_PREVIEW";        // collapse_preview_t, planner
+inline constexpr const char* kHintChannel = "BL_HINT";              // hint_t, planner
+
+// The channel name with the deployment's prefix (environment BRICKLAYER_CHANNEL_PREFIX, default none).
+std::string channel(const char* name);
+
+}  // namespace bricklayer

@@ -1,0 +1,67 @@
+// The collapse prediction: is the pile balanced, which blocks move, which start the collapse.
+// See shared DESIGN.md "The physics" and modules/core/README.md for the tolerance policy.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "bricklayer/core/stack.h"
+
+namespace bricklayer::core {
+
+enum class BlockState { kStable = 0, kMoving = 1, kCause = 2 };  // same values as block_prediction_t::STATE_*
+
+enum class Annotator {
+  kExact,    // causes from the initial-acceleration QP (default)
+  kPaper,    // the seed paper's fictitious-force LP
+  kBalance,  // Paterson & Zwick feasibility only: every block of an unbalanced pile is a cause candidate
+};
+
+struct PredictOptions {
+  Annotator annotator = Annotator::kExact;
+  std::string solver = "clp";  // LP backend: "clp" or "nlopt"
+};
+
+struct BlockVerdict {
+  int64_t id = 0;
+  BlockState state = BlockState::kStable;
+  double accel = 0.0;  // initial vertical acceleration of the centre, units of g (exact annotator)
+  double alpha = 0.0;  // initial angular acceleration, g per block length (exact annotator)
+};
+
+struct Prediction {
+  bool balanced = true;
+  std::vector<BlockVerdict> blocks;  // same order as the stack's blocks
+  double overhang = 0.0;             // block lengths beyond the surface edge
+  int32_t score = 0;                 // round(100 * overhang)
+  std::string annotator;
+  std::string solver;
+
+  std::vector<int64_t> causes() const;  // ids of red blocks
+  std::vector<int64_t> moving() const;  // ids with a nonzero initial acceleration (causes included)
+};
+
+// Thrown when a backend fails (not for "unbalanced", which is a verdict).
+class SolverError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Validates (StackError) and predicts (SolverError on backend failure). Deterministic: the same stack
+// and options give bit-identical output.
+Prediction predict(const Stack& stack, const PredictOptions& options = {});
+
+// Overhang in block lengths and the score, without solving anything.
+double overhang(const Stack& stack);
+int32_t score_of(double overhang_in_block_lengths);
+
+// bricklayer-predict's output object.
+nlohmann::json to_json(const Prediction& prediction);
+
+Annotator parse_annotator(const std::string& name);  // throws std::invalid_argument
+std::string to_string(Annotator annotator);
+
+}  // namespace bricklayer::core
