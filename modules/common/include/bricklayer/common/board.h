@@ -3,9 +3,20 @@
 // This is the --board FILE of bricklayer-vision and the layout simcam renders.
 #pragma once
 
+#include <array>
 #include <string>
 
 namespace bricklayer {
+
+// The uncalibrated default setup, shared by simcam (what it renders), vision (what it assumes) and
+// projection (where it draws) so the demo lines up before any calibration: a 640x480 camera looking
+// straight at the board with the BoardGeometry defaults below, and a 1024x768 projector whose image
+// covers exactly the camera's view (projector pixel = 1.6 x camera pixel).
+inline constexpr int kDefaultCameraWidth = 640;
+inline constexpr int kDefaultCameraHeight = 480;
+inline constexpr int kDefaultProjectorWidth = 1024;
+inline constexpr int kDefaultProjectorHeight = 768;
+inline constexpr std::array<double, 9> kDefaultCameraToProjector = {1.6, 0, 0, 0, 1.6, 0, 0, 0, 1};
 
 struct BoardGeometry {
   double edge_x_px = 320.0;       // pixel column of the surface edge
@@ -18,6 +29,13 @@ struct BoardGeometry {
   double to_px_y(double y_blocks) const { return surface_y_px - y_blocks * block_length_px; }
   double from_px_x(double u) const { return (u - edge_x_px) / block_length_px; }
   double row_top_px(int row) const { return surface_y_px - (row + 1) * block_height_px; }
+
+  // Row-major homography from (rectified) camera pixels to board coordinates, matching to_px_*.
+  std::array<double, 9> camera_to_board() const {
+    return {1.0 / block_length_px, 0, -edge_x_px / block_length_px,
+            0, -1.0 / block_length_px, surface_y_px / block_length_px,
+            0, 0, 1};
+  }
 };
 
 // Reads {"edge_x_px":..,"surface_y_px":..,"block_length_px":..,"block_height_px":..}.
