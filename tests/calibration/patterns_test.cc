@@ -84,9 +84,8 @@ TEST_CASE("Every marker set is detected at its layout position") {
     for (const auto& m : layout) {
       REQUIRE(found.count(m.id) == 1);
       for (int k = 0; k < 4; ++k) {
-        // detectMarkers reports the outer corner of the black border at the pixel-edge position,
-        // i.e. half a pixel outside the first/last black pixel centre.
-        CHECK(cv::norm(found[m.id][k] - m.corners[k]) < 1.0);
+        // Both at the pixel-edge position of the black border (measured bias of the detector ~0.06 px).
+        CHECK(cv::norm(found[m.id][k] - m.corners[k]) < 0.2);
       }
     }
   }

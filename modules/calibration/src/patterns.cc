@@ -57,8 +57,9 @@ GridSpec grid_spec(cv::Size size) {
 MarkerPlacement place(int id, double x, double y, int side) {
   MarkerPlacement m;
   m.id = id;
-  const auto fx = static_cast<float>(x);
-  const auto fy = static_cast<float>(y);
+  m.pixels = cv::Rect(static_cast<int>(x), static_cast<int>(y), side, side);
+  const auto fx = static_cast<float>(m.pixels.x) - 0.5f;
+  const auto fy = static_cast<float>(m.pixels.y) - 0.5f;
   const auto s = static_cast<float>(side);
   m.corners = {cv::Point2f(fx, fy), cv::Point2f(fx + s, fy), cv::Point2f(fx + s, fy + s), cv::Point2f(fx, fy + s)};
   return m;
@@ -185,10 +186,9 @@ cv::Mat render_pattern(const bricklayer::command_t& cmd, cv::Size size) {
     case bricklayer::command_t::PATTERN_MARKERS: {
       cv::Mat gray(size, CV_8UC1, cv::Scalar(255));
       for (const MarkerPlacement& m : marker_layout(cmd.index, size)) {
-        const int side = static_cast<int>(std::lround(m.corners[1].x - m.corners[0].x));
+        const cv::Rect where = m.pixels;
         cv::Mat marker;
-        cv::aruco::drawMarker(dictionary(), m.id, side, marker, 1);
-        const cv::Rect where(static_cast<int>(m.corners[0].x), static_cast<int>(m.corners[0].y), side, side);
+        cv::aruco::drawMarker(dictionary(), m.id, where.width, marker, 1);
         const cv::Rect clipped = where & cv::Rect(0, 0, size.width, size.height);
         if (clipped.area() == 0) continue;
         marker(cv::Rect(clipped.x - where.x, clipped.y - where.y, clipped.width, clipped.height)).copyTo(gray(clipped));

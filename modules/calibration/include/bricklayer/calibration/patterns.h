@@ -49,8 +49,10 @@ inline constexpr int kMarkerSetCount = 3;
 
 struct MarkerPlacement {
   int id = 0;
-  // Outer corners of the marker's black square in projector pixels, in ArUco's order (top-left,
-  // top-right, bottom-right, bottom-left), the same order cv::aruco::detectMarkers reports them.
+  cv::Rect pixels;  // the projector pixels the marker (with its black border) covers
+  // Outer corners of the marker's black square in projector pixel coordinates (pixel centres at
+  // integers, so the edge of pixel column x is at x - 0.5), in ArUco's order (top-left, top-right,
+  // bottom-right, bottom-left), the same order and convention cv::aruco::detectMarkers reports.
   std::array<cv::Point2f, 4> corners;
 };
 std::vector<MarkerPlacement> marker_layout(int set, cv::Size projector_size);
