@@ -3,11 +3,13 @@
 #pragma once
 
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "bricklayer/core/dynamics.h"
 #include "bricklayer/core/stack.h"
 
 namespace bricklayer::core {
@@ -20,9 +22,19 @@ enum class Annotator {
   kBalance,  // Paterson & Zwick feasibility only: every block of an unbalanced pile is a cause candidate
 };
 
+// A pile is balanced when the smallest total violation of the equilibrium equations (sum of absolute force
+// and moment residuals over all blocks, units of block weight and block weight x block length) that
+// nonnegative contact forces can reach is at most this. See modules/core/README.md "Tolerance policy".
+inline constexpr double kBalanceTolerance = 1e-6;
+// A fictitious force (paper annotator) above this (units of block weight) makes its block red.
+inline constexpr double kFictitiousTolerance = 1e-7;
+
 struct PredictOptions {
   Annotator annotator = Annotator::kExact;
   std::string solver = "clp";  // LP backend: "clp" or "nlopt"
+  QpMethod qp = QpMethod::kNnls;  // exact annotator's QP
+  bool lp_first = true;           // exact annotator: answer balanced piles with the LP before any QP
+  StackLimits limits;
 };
 
 struct BlockVerdict {
@@ -39,6 +51,7 @@ struct Prediction {
   int32_t score = 0;                 // round(100 * overhang)
   std::string annotator;
   std::string solver;
+  std::string qp;  // exact annotator: "nnls" or "nlopt"; empty when no QP was solved
 
   std::vector<int64_t> causes() const;  // ids of red blocks
   std::vector<int64_t> moving() const;  // ids with a nonzero initial acceleration (causes included)
@@ -53,6 +66,10 @@ class SolverError : public std::runtime_error {
 // Validates (StackError) and predicts (SolverError on backend failure). Deterministic: the same stack
 // and options give bit-identical output.
 Prediction predict(const Stack& stack, const PredictOptions& options = {});
+
+// Minimum total equilibrium violation (see kBalanceTolerance) with the given LP backend; blocks whose free
+// flag is 0 are held fixed. Throws SolverError when the backend fails.
+double balance_violation(const ContactGraph& graph, const std::string& solver, const std::vector<char>& free = {});
 
 // Overhang in block lengths and the score, without solving anything.
 double overhang(const Stack& stack);

@@ -1,0 +1,84 @@
+// One optimisation problem, many solvers (Drake's MathematicalProgram + final adapters, made small).
+//
+//   minimise    c^T x + 1/2 x^T Q x
+//   subject to  row_lower <= A x <= row_upper,   lower <= x <= upper
+//
+// A Problem is written once; Solver::solve() does every shared check (compiled in? problem well formed?
+// quadratic objective supported?) and then calls one backend's protected hook. Every backend maps its
+// native result codes onto the one SolveStatus vocabulary and keeps the native code on the side.
+#pragma once
+
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace bricklayer::core::opt {
+
+inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+enum class SolveStatus { kOptimal, kInfeasible, kUnbounded, kLimitReached, kError };
+std::string to_string(SolveStatus status);
+
+struct Entry {
+  int row = 0;  // (for Q: first variable)
+  int col = 0;
+  double value = 0.0;
+};
+
+struct Problem {
+  std::vector<double> lower, upper, cost;  // one per variable
+  std::vector<double> row_lower, row_upper;  // one per linear constraint (equal bounds: an equality)
+  std::vector<Entry> a;  // constraint matrix entries (duplicates are summed)
+  std::vector<Entry> q;  // quadratic objective entries; give both (i,j) and (j,i) for off-diagonal terms
+
+  int num_variables() const { return static_cast<int>(cost.size()); }
+  int num_rows() const { return static_cast<int>(row_lower.size()); }
+  bool is_linear() const { return q.empty(); }
+
+  int add_variable(double lo, double hi, double c);
+  int add_row(double lo, double hi);
+  void set(int row, int var, double value) { a.push_back({row, var, value}); }
+  void add_quadratic(int i, int j, double value) { q.push_back({i, j, value}); }
+
+  // Empty when well formed, else a one-line description of the first problem found.
+  std::string check() const;
+  // Largest violation of the rows and bounds at x (absolute).
+  double max_violation(const std::vector<double>& x) const;
+  double objective(const std::vector<double>& x) const;
+};
+
+struct SolveResult {
+  SolveStatus status = SolveStatus::kError;
+  std::vector<double> x;      // the solution when status == kOptimal
+  double objective = 0.0;
+  std::string message;        // human-readable detail (always set unless optimal)
+  int native_status = 0;      // the backend's own code, for diagnostics only
+  std::string solver;         // which backend answered
+};
+
+struct SolverOptions {
+  double feasibility_tolerance = 1e-9;  // accepted violation of rows and bounds
+  int max_iterations = 0;               // 0: the backend's default
+};
+
+class Solver {
+ public:
+  virtual ~Solver() = default;
+  // Non-virtual: checks availability and the problem, then calls do_solve().
+  SolveResult solve(const Problem& problem, const SolverOptions& options = {}) const;
+
+  virtual std::string name() const = 0;
+  virtual bool available() const = 0;  // false when the backend was not compiled in
+  virtual bool supports_quadratic() const = 0;
+
+ protected:
+  virtual SolveResult do_solve(const Problem& problem, const SolverOptions& options) const = 0;
+};
+
+// "clp" or "nlopt". Throws std::invalid_argument for an unknown name; returns a stub whose solve() reports
+// "not compiled in" when the backend is disabled (BRICKLAYER_WITH_CLP / BRICKLAYER_WITH_NLOPT).
+std::unique_ptr<Solver> make_solver(const std::string& name);
+std::vector<std::string> solver_names();
+
+}  // namespace bricklayer::core::opt

@@ -1,0 +1,73 @@
+// COIN-OR CLP backend: linear programs only (CLP's quadratic solver is unreliable on these problems).
+#include <ClpSimplex.hpp>
+#include <CoinPackedMatrix.hpp>
+
+#include "bricklayer/core/program.h"
+
+namespace bricklayer::core::opt {
+namespace {
+
+double to_clp(double bound) {
+  if (bound == kInfinity) return COIN_DBL_MAX;
+  if (bound == -kInfinity) return -COIN_DBL_MAX;
+  return bound;
+}
+
+class ClpSolver final : public Solver {
+ public:
+  std::string name() const override { return "clp"; }
+  bool available() const override { return true; }
+  bool supports_quadratic() const override { return false; }
+
+ protected:
+  SolveResult do_solve(const Problem& problem, const SolverOptions& options) const override {
+    const int n = problem.num_variables();
+    const int m = problem.num_rows();
+    std::vector<int> rows, cols;
+    std::vector<double> values;
+    rows.reserve(problem.a.size());
+    cols.reserve(problem.a.size());
+    values.reserve(problem.a.size());
+    for (const Entry& e : problem.a) {
+      rows.push_back(e.row);
+      cols.push_back(e.col);
+      values.push_back(e.value);
+    }
+    // Column-ordered so that duplicates are summed; explicit sizes keep empty rows/columns.
+    CoinPackedMatrix matrix(true, rows.data(), cols.data(), values.data(), static_cast<CoinBigIndex>(values.size()));
+    matrix.setDimensions(m, n);
+    std::vector<double> lo(n), hi(n), rlo(m), rhi(m);
+    for (int i = 0; i < n; ++i) lo[i] = to_clp(problem.lower[i]), hi[i] = to_clp(problem.upper[i]);
+    for (int r = 0; r < m; ++r) rlo[r] = to_clp(problem.row_lower[r]), rhi[r] = to_clp(problem.row_upper[r]);
+
+    ClpSimplex model;
+    model.setLogLevel(0);
+    model.loadProblem(matrix, lo.data(), hi.data(), problem.cost.data(), rlo.data(), rhi.data());
+    model.setPrimalTolerance(options.feasibility_tolerance);
+    model.setDualTolerance(1e-9);
+    if (options.max_iterations > 0) model.setMaximumIterations(options.max_iterations);
+    model.dual();
+
+    SolveResult result;
+    result.native_status = model.status();
+    switch (model.status()) {
+      case 0: result.status = SolveStatus::kOptimal; break;
+      case 1: result.status = SolveStatus::kInfeasible; result.message = "clp: primal infeasible"; break;
+      case 2: result.status = SolveStatus::kUnbounded; result.message = "clp: dual infeasible (unbounded)"; break;
+      case 3: result.status = SolveStatus::kLimitReached; result.message = "clp: iteration or time limit"; break;
+      default: result.status = SolveStatus::kError; result.message = "clp: stopped with status " + std::to_string(model.status()); break;
+    }
+    if (result.status == SolveStatus::kOptimal) {
+      const double* x = model.primalColumnSolution();
+      result.x.assign(x, x + n);
+      result.objective = model.objectiveValue();
+    }
+    return result;
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Solver> make_clp_solver() { return std::make_unique<ClpSolver>(); }
+
+}  // namespace bricklayer::core::opt

@@ -1,0 +1,160 @@
+#include "bricklayer/core/dynamics.h"
+
+#include <array>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/SparseCore>
+
+#include "bricklayer/core/nnls.h"
+#include "bricklayer/core/program.h"
+
+namespace bricklayer::core {
+
+QpMethod parse_qp_method(const std::string& name) {
+  if (name == "nnls") return QpMethod::kNnls;
+  if (name == "nlopt") return QpMethod::kNlopt;
+  throw std::invalid_argument("unknown QP method \"" + name + "\" (expected nnls or nlopt)");
+}
+
+std::string to_string(QpMethod method) { return method == QpMethod::kNnls ? "nnls" : "nlopt"; }
+
+bool Accelerations::moving(size_t i) const {
+  return std::abs(a[i]) + 0.5 * std::abs(alpha[i]) > kAccelerationTolerance;
+}
+
+bool Accelerations::any_moving() const {
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (moving(i)) return true;
+  }
+  return false;
+}
+
+namespace {
+
+// The contact rows of the QP: one per contact end, J z >= 0, over the free blocks' (a, alpha).
+struct ContactRows {
+  std::vector<int> var;        // block index -> first variable (2 per free block), -1 when fixed
+  int num_vars = 0;
+  struct Term {
+    int var;
+    double value;
+  };
+  std::vector<std::array<Term, 4>> rows;  // unused terms have var = -1
+  std::vector<int> contact_end;           // 2 * contact + (0 left, 1 right)
+};
+
+ContactRows contact_rows(const ContactGraph& g, const std::vector<char>& free) {
+  ContactRows c;
+  const size_t n = g.size();
+  c.var.assign(n, -1);
+  for (size_t i = 0; i < n; ++i) {
+    if (free.empty() || free[i]) {
+      c.var[i] = c.num_vars;
+      c.num_vars += 2;
+    }
+  }
+  for (size_t k = 0; k < g.contacts.size(); ++k) {
+    const Contact& ct = g.contacts[k];
+    const int vu = c.var[static_cast<size_t>(ct.upper)];
+    if (vu < 0) continue;  // upper block fixed: the contact cannot constrain anything free
+    const int vl = ct.lower == kSurface ? -1 : c.var[static_cast<size_t>(ct.lower)];
+    for (int end = 0; end < 2; ++end) {
+      const double p = end == 0 ? ct.left : ct.right;
+      std::array<ContactRows::Term, 4> row{{{vu, 1.0}, {vu + 1, p - g.centre(ct.upper)}, {-1, 0.0}, {-1, 0.0}}};
+      if (vl >= 0) {
+        row[2] = {vl, -1.0};
+        row[3] = {vl + 1, -(p - g.centre(ct.lower))};
+      }
+      c.rows.push_back(row);
+      c.contact_end.push_back(static_cast<int>(2 * k) + end);
+    }
+  }
+  return c;
+}
+
+Accelerations by_nnls(const ContactGraph& g, const ContactRows& c) {
+  const double inertia = (1.0 + g.height * g.height) / 12.0;
+  const double inv_sqrt_inertia = 1.0 / std::sqrt(inertia);
+  // A = M^-1/2 J^T (variables x contact ends), b = -M^1/2 z0 = (1, 0, 1, 0, ...).
+  const int m = static_cast<int>(c.rows.size());
+  Eigen::SparseMatrix<double> A(c.num_vars, m);
+  A.reserve(Eigen::VectorXi::Constant(m, 4));
+  for (int k = 0; k < m; ++k) {
+    for (const auto& t : c.rows[static_cast<size_t>(k)]) {
+      if (t.var < 0) continue;
+      A.insert(t.var, k) = (t.var % 2 == 0) ? t.value : t.value * inv_sqrt_inertia;
+    }
+  }
+  A.makeCompressed();
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(c.num_vars);
+  for (int v = 0; v < c.num_vars; v += 2) b(v) = 1.0;
+  const NnlsResult nnls = solve_nnls(A, b);
+  // z = z0 + M^-1 J^T lambda = M^-1/2 (A lambda - b)
+  const Eigen::VectorXd r = A * nnls.x - b;
+  Accelerations out;
+  out.a.assign(g.size(), 0.0);
+  out.alpha.assign(g.size(), 0.0);
+  out.force.assign(2 * g.contacts.size(), 0.0);
+  for (size_t i = 0; i < g.size(); ++i) {
+    const int v = c.var[i];
+    if (v < 0) continue;
+    out.a[i] = r(v);
+    out.alpha[i] = r(v + 1) * inv_sqrt_inertia;
+  }
+  for (int k = 0; k < m; ++k) out.force[static_cast<size_t>(c.contact_end[static_cast<size_t>(k)])] = nnls.x(k);
+  out.converged = nnls.converged;
+  out.iterations = nnls.iterations;
+  return out;
+}
+
+Accelerations by_nlopt(const ContactGraph& g, const ContactRows& c) {
+  const double inertia = (1.0 + g.height * g.height) / 12.0;
+  opt::Problem problem;
+  // minimise 1/2 (a+1)^2 + 1/2 I alpha^2 = 1/2 a^2 + a + 1/2 I alpha^2 + const
+  for (int v = 0; v < c.num_vars; v += 2) {
+    problem.add_variable(-opt::kInfinity, opt::kInfinity, 1.0);
+    problem.add_variable(-opt::kInfinity, opt::kInfinity, 0.0);
+    problem.add_quadratic(v, v, 1.0);
+    problem.add_quadratic(v + 1, v + 1, inertia);
+  }
+  for (const auto& row : c.rows) {
+    const int r = problem.add_row(0.0, opt::kInfinity);
+    for (const auto& t : row) {
+      if (t.var >= 0) problem.set(r, t.var, t.value);
+    }
+  }
+  opt::SolverOptions options;
+  options.feasibility_tolerance = 1e-9;
+  const opt::SolveResult result = opt::make_solver("nlopt")->solve(problem, options);
+  if (result.status != opt::SolveStatus::kOptimal) {
+    throw std::runtime_error("exact annotator QP (nlopt): " + opt::to_string(result.status) + ": " + result.message);
+  }
+  Accelerations out;
+  out.a.assign(g.size(), 0.0);
+  out.alpha.assign(g.size(), 0.0);
+  for (size_t i = 0; i < g.size(); ++i) {
+    const int v = c.var[i];
+    if (v < 0) continue;
+    out.a[i] = result.x[static_cast<size_t>(v)] + 0.0;
+    out.alpha[i] = result.x[static_cast<size_t>(v) + 1];
+  }
+  return out;
+}
+
+}  // namespace
+
+Accelerations initial_accelerations(const ContactGraph& graph, const std::vector<char>& free, QpMethod method) {
+  if (!free.empty() && free.size() != graph.size()) throw std::invalid_argument("free: one flag per block expected");
+  const ContactRows rows = contact_rows(graph, free);
+  if (rows.num_vars == 0) {
+    Accelerations none;
+    none.a.assign(graph.size(), 0.0);
+    none.alpha.assign(graph.size(), 0.0);
+    none.force.assign(2 * graph.contacts.size(), 0.0);
+    return none;
+  }
+  return method == QpMethod::kNnls ? by_nnls(graph, rows) : by_nlopt(graph, rows);
+}
+
+}  // namespace bricklayer::core

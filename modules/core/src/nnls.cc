@@ -1,0 +1,230 @@
+#include "bricklayer/core/nnls.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/SparseCore>
+
+namespace bricklayer::core {
+namespace {
+
+// Cholesky factor L (lower) of gram restricted to an ordered passive set, updated in O(p^2).
+template <class Ops>
+class PassiveCholesky {
+ public:
+  PassiveCholesky(const Ops& ops, int n) : ops_(ops), l_(n, n) {}
+
+  const std::vector<int>& indices() const { return passive_; }
+  int size() const { return static_cast<int>(passive_.size()); }
+
+  // Appends index j; false (and nothing changes) when its column is numerically dependent on the passive ones.
+  bool add(int j) {
+    const int p = size();
+    const double gjj = ops_.gram(j, j);
+    if (!(gjj > 0.0)) return false;
+    Eigen::VectorXd col(p);
+    for (int k = 0; k < p; ++k) col(k) = ops_.gram(passive_[static_cast<size_t>(k)], j);
+    if (p > 0) l_.topLeftCorner(p, p).triangularView<Eigen::Lower>().solveInPlace(col);
+    const double d = gjj - col.squaredNorm();
+    if (!(d > 1e-12 * gjj)) return false;
+    l_.block(p, 0, 1, p) = col.transpose();
+    l_(p, p) = std::sqrt(d);
+    passive_.push_back(j);
+    return true;
+  }
+
+  // Removes the passive index at position k and restores the triangle with Givens rotations.
+  void remove_at(int k) {
+    const int p = size();
+    for (int i = k; i < p - 1; ++i) l_.row(i).head(p) = l_.row(i + 1).head(p);
+    for (int i = k; i < p - 1; ++i) {
+      const double a = l_(i, i);
+      const double b = l_(i, i + 1);
+      const double r = std::hypot(a, b);
+      if (r == 0.0) continue;
+      const double c = a / r;
+      const double s = b / r;
+      for (int t = i; t < p - 1; ++t) {
+        const double u = l_(t, i);
+        const double v = l_(t, i + 1);
+        l_(t, i) = c * u + s * v;
+        l_(t, i + 1) = -s * u + c * v;
+      }
+      l_(i, i + 1) = 0.0;
+    }
+    passive_.erase(passive_.begin() + k);
+  }
+
+  // Solves gram_PP s = rhs_P.
+  Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const {
+    const int p = size();
+    Eigen::VectorXd s(p);
+    for (int k = 0; k < p; ++k) s(k) = rhs(passive_[static_cast<size_t>(k)]);
+    const auto lower = l_.topLeftCorner(p, p).triangularView<Eigen::Lower>();
+    lower.solveInPlace(s);
+    lower.transpose().solveInPlace(s);
+    return s;
+  }
+
+ private:
+  const Ops& ops_;
+  Eigen::MatrixXd l_;
+  std::vector<int> passive_;
+};
+
+// Ops: gram(i, j) = (A^T A)_ij, gradient(x) = A^T (b - A x), atb() = A^T b, max_gram_diagonal().
+template <class Ops>
+NnlsResult lawson_hanson(const Ops& ops, int max_iterations) {
+  const Eigen::VectorXd& atb = ops.atb();
+  const int n = static_cast<int>(atb.size());
+  NnlsResult result;
+  result.x = Eigen::VectorXd::Zero(n);
+  if (n == 0) {
+    result.converged = true;
+    return result;
+  }
+  if (max_iterations <= 0) max_iterations = 3 * n;
+  const double scale = std::max(1.0, atb.cwiseAbs().maxCoeff()) * std::max(1.0, ops.max_gram_diagonal());
+  const double tol = 1e-11 * scale;
+
+  PassiveCholesky<Ops> chol(ops, n);
+  std::vector<char> in_passive(static_cast<size_t>(n), 0);
+  std::vector<char> rejected(static_cast<size_t>(n), 0);
+  Eigen::VectorXd& x = result.x;
+  Eigen::VectorXd w = atb;  // gradient of -1/2||Ax-b||^2 at x = 0
+
+  while (result.iterations < max_iterations) {
+    int best = -1;
+    double best_w = tol;
+    for (int j = 0; j < n; ++j) {
+      if (!in_passive[static_cast<size_t>(j)] && !rejected[static_cast<size_t>(j)] && w(j) > best_w) {
+        best_w = w(j);
+        best = j;
+      }
+    }
+    if (best < 0) {
+      result.converged = true;
+      break;
+    }
+    ++result.iterations;
+    if (!chol.add(best)) {
+      rejected[static_cast<size_t>(best)] = 1;  // dependent column: its gradient is rounding noise
+      continue;
+    }
+    in_passive[static_cast<size_t>(best)] = 1;
+    std::fill(rejected.begin(), rejected.end(), 0);
+
+    Eigen::VectorXd s = chol.solve(atb);
+    // Inner loop: step back towards x until every passive variable is positive.
+    int guard = 0;
+    while (true) {
+      const auto& passive = chol.indices();
+      double alpha = 2.0;
+      for (int k = 0; k < chol.size(); ++k) {
+        if (s(k) <= 0.0) {
+          const double xk = x(passive[static_cast<size_t>(k)]);
+          const double a = xk / (xk - s(k));
+          alpha = std::min(alpha, a);
+        }
+      }
+      if (alpha > 1.0) break;
+      if (++guard > 3 * n) break;  // cannot happen in exact arithmetic
+      for (int k = 0; k < chol.size(); ++k) {
+        const int j = passive[static_cast<size_t>(k)];
+        x(j) += alpha * (s(k) - x(j));
+      }
+      // Move every passive variable that reached zero (at least the blocking one) to the zero set.
+      bool removed = false;
+      for (int k = chol.size() - 1; k >= 0; --k) {
+        const int j = chol.indices()[static_cast<size_t>(k)];
+        if (x(j) <= 1e-15 * scale || (s(k) <= 0.0 && x(j) <= 1e-12 * scale)) {
+          x(j) = 0.0;
+          in_passive[static_cast<size_t>(j)] = 0;
+          chol.remove_at(k);
+          removed = true;
+        }
+      }
+      if (!removed) {
+        // Rounding: remove the blocking index explicitly.
+        int worst = 0;
+        double worst_ratio = 2.0;
+        for (int k = 0; k < chol.size(); ++k) {
+          if (s(k) <= 0.0) {
+            const double xk = x(chol.indices()[static_cast<size_t>(k)]);
+            const double a = xk / (xk - s(k));
+            if (a < worst_ratio) worst_ratio = a, worst = k;
+          }
+        }
+        const int j = chol.indices()[static_cast<size_t>(worst)];
+        x(j) = 0.0;
+        in_passive[static_cast<size_t>(j)] = 0;
+        chol.remove_at(worst);
+      }
+      s = chol.solve(atb);
+    }
+    for (int k = 0; k < chol.size(); ++k) x(chol.indices()[static_cast<size_t>(k)]) = std::max(0.0, s(k));
+    w = ops.gradient(x);
+  }
+  return result;
+}
+
+struct DenseOps {
+  const Eigen::MatrixXd& g;
+  const Eigen::VectorXd& ab;
+  double gram(int i, int j) const { return g(i, j); }
+  const Eigen::VectorXd& atb() const { return ab; }
+  Eigen::VectorXd gradient(const Eigen::VectorXd& x) const { return ab - g * x; }
+  double max_gram_diagonal() const { return g.diagonal().maxCoeff(); }
+};
+
+struct SparseOps {
+  const Eigen::SparseMatrix<double>& a;  // column-major
+  const Eigen::VectorXd& b;
+  Eigen::VectorXd ab;
+  SparseOps(const Eigen::SparseMatrix<double>& a_, const Eigen::VectorXd& b_) : a(a_), b(b_), ab(a_.transpose() * b_) {}
+  double gram(int i, int j) const {
+    Eigen::SparseMatrix<double>::InnerIterator p(a, i), q(a, j);
+    double sum = 0.0;
+    while (p && q) {
+      if (p.row() == q.row()) {
+        sum += p.value() * q.value();
+        ++p;
+        ++q;
+      } else if (p.row() < q.row()) {
+        ++p;
+      } else {
+        ++q;
+      }
+    }
+    return sum;
+  }
+  const Eigen::VectorXd& atb() const { return ab; }
+  Eigen::VectorXd gradient(const Eigen::VectorXd& x) const {
+    const Eigen::VectorXd r = b - a * x;
+    return a.transpose() * r;
+  }
+  double max_gram_diagonal() const {
+    double best = 0.0;
+    for (int j = 0; j < a.cols(); ++j) best = std::max(best, a.col(j).squaredNorm());
+    return best;
+  }
+};
+
+}  // namespace
+
+NnlsResult solve_nnls_normal(const Eigen::MatrixXd& gram, const Eigen::VectorXd& atb, int max_iterations) {
+  return lawson_hanson(DenseOps{gram, atb}, max_iterations);
+}
+
+NnlsResult solve_nnls(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b, int max_iterations) {
+  return lawson_hanson(SparseOps(A, b), max_iterations);
+}
+
+NnlsResult solve_nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, int max_iterations) {
+  const Eigen::MatrixXd gram = A.transpose() * A;
+  const Eigen::VectorXd atb = A.transpose() * b;
+  return solve_nnls_normal(gram, atb, max_iterations);
+}
+
+}  // namespace bricklayer::core

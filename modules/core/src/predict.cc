@@ -1,0 +1,283 @@
+// The three annotators (DESIGN.md "The physics"): balance, paper, exact.
+#include "bricklayer/core/predict.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "bricklayer/core/contacts.h"
+#include "bricklayer/core/program.h"
+
+namespace bricklayer::core {
+namespace {
+
+bool is_free(const std::vector<char>& free, size_t i) { return free.empty() || free[i] != 0; }
+
+// Equilibrium rows of every free block: row 2i (force) and 2i+1 (moment about its centre), over variables
+// lambda (two per contact, left end then right end). Returns the row index of each block (-1 when fixed).
+std::vector<int> add_equilibrium(const ContactGraph& g, const std::vector<char>& free, opt::Problem& problem,
+                                 std::vector<int>& contact_var) {
+  std::vector<int> row(g.size(), -1);
+  for (size_t i = 0; i < g.size(); ++i) {
+    if (!is_free(free, i)) continue;
+    row[i] = problem.add_row(1.0, 1.0);  // upward contact forces - downward = weight
+    problem.add_row(0.0, 0.0);           // moments about the centre
+  }
+  contact_var.assign(g.contacts.size(), -1);
+  for (size_t k = 0; k < g.contacts.size(); ++k) {
+    const Contact& c = g.contacts[k];
+    if (!is_free(free, static_cast<size_t>(c.upper))) continue;
+    const int v = problem.add_variable(0.0, opt::kInfinity, 0.0);
+    problem.add_variable(0.0, opt::kInfinity, 0.0);
+    contact_var[k] = v;
+    for (int end = 0; end < 2; ++end) {
+      const double p = end == 0 ? c.left : c.right;
+      const int ru = row[static_cast<size_t>(c.upper)];
+      problem.set(ru, v + end, 1.0);
+      problem.set(ru + 1, v + end, p - g.centre(c.upper));
+      if (c.lower != kSurface && row[static_cast<size_t>(c.lower)] >= 0) {
+        const int rl = row[static_cast<size_t>(c.lower)];
+        problem.set(rl, v + end, -1.0);
+        problem.set(rl + 1, v + end, -(p - g.centre(c.lower)));
+      }
+    }
+  }
+  return row;
+}
+
+opt::SolveResult solve_lp(const opt::Problem& problem, const std::string& solver, const char* what) {
+  const opt::SolveResult result = opt::make_solver(solver)->solve(problem);
+  if (result.status != opt::SolveStatus::kOptimal) {
+    throw SolverError(std::string(what) + " LP (" + solver + "): " + opt::to_string(result.status) + ": " +
+                      result.message);
+  }
+  return result;
+}
+
+// A place where the paper annotator may apply a fictitious upward force.
+struct Fictitious {
+  int block = 0;
+  double position = 0.0;  // the block end it acts on
+  double pivot = 0.0;     // the support end the block would tip about
+  double weight = 1.0;
+};
+
+// Fictitious forces at the overhanging end(s) of every block resting on a single block (or on the surface
+// alone) and at both ends of a block resting on nothing.
+std::vector<Fictitious> fictitious_candidates(const ContactGraph& g) {
+  std::vector<Fictitious> out;
+  for (int r = 0; r < g.num_rows(); ++r) {
+    for (int i : g.rows[static_cast<size_t>(r)]) {
+      const auto& sup = g.supports[static_cast<size_t>(i)];
+      const double left = g.x[static_cast<size_t>(i)];
+      const double right = left + 1.0;
+      if (sup.empty()) {
+        out.push_back({i, left, right, 1.0});
+        out.push_back({i, right, left, 1.0});
+      } else if (sup.size() == 1) {
+        const Contact& c = g.contacts[static_cast<size_t>(sup[0])];
+        if (right - c.right > kContactTolerance) out.push_back({i, right, c.right, 1.0});
+        if (c.left - left > kContactTolerance) out.push_back({i, left, c.left, 1.0});
+      }
+    }
+  }
+  // Weights (DESIGN.md): supporting a lower block directly must be cheaper than supporting it through a higher
+  // one: c_b * x' < c_b' * x for every lower candidate b and higher candidate b', x = |b's end - b's pivot|,
+  // x' = |b''s end - b's pivot|. Candidates are in row order, so one pass bottom-up assigns them. Lever arms
+  // are floored at 0.01 and weights capped at 1e6 to keep the LP well scaled (README: the cap can bind only on
+  // piles with more than ~8 one-on-one rows stacked).
+  constexpr double kMinLever = 0.01;
+  constexpr double kMaxWeight = 1e6;
+  for (size_t k = 0; k < out.size(); ++k) {
+    double c = 1.0;
+    const int rk = g.row[static_cast<size_t>(out[k].block)];
+    for (size_t b = 0; b < k; ++b) {
+      if (g.row[static_cast<size_t>(out[b].block)] >= rk) continue;
+      const double x = std::max(kMinLever, std::abs(out[b].position - out[b].pivot));
+      const double xp = std::abs(out[k].position - out[b].pivot);
+      c = std::max(c, 1.5 * out[b].weight * xp / x);
+    }
+    out[k].weight = std::min(c, kMaxWeight);
+  }
+  return out;
+}
+
+void fill_common(const Stack& stack, Prediction& p) {
+  p.blocks.resize(stack.blocks.size());
+  for (size_t i = 0; i < stack.blocks.size(); ++i) p.blocks[i].id = stack.blocks[i].id;
+  p.overhang = overhang(stack);
+  p.score = score_of(p.overhang);
+}
+
+void annotate_balance(const ContactGraph& g, const PredictOptions& options, Prediction& p) {
+  p.balanced = balance_violation(g, options.solver) <= kBalanceTolerance;
+  if (!p.balanced) {
+    for (auto& b : p.blocks) b.state = BlockState::kCause;
+  }
+}
+
+void annotate_paper(const ContactGraph& g, const PredictOptions& options, Prediction& p) {
+  opt::Problem problem;
+  std::vector<int> contact_var;
+  const std::vector<int> row = add_equilibrium(g, {}, problem, contact_var);
+  const std::vector<Fictitious> candidates = fictitious_candidates(g);
+  std::vector<int> var(candidates.size());
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    const Fictitious& f = candidates[k];
+    var[k] = problem.add_variable(0.0, opt::kInfinity, f.weight);
+    const int r = row[static_cast<size_t>(f.block)];
+    problem.set(r, var[k], 1.0);
+    problem.set(r + 1, var[k], f.position - g.centre(f.block));
+  }
+  const opt::SolveResult result = solve_lp(problem, options.solver, "paper annotator");
+  p.balanced = true;
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    if (result.x[static_cast<size_t>(var[k])] > kFictitiousTolerance) {
+      p.blocks[static_cast<size_t>(candidates[k].block)].state = BlockState::kCause;
+      p.balanced = false;
+    }
+  }
+}
+
+void annotate_exact(const ContactGraph& g, const PredictOptions& options, Prediction& p) {
+  p.balanced = true;
+  if (g.size() == 0) return;
+  if (options.lp_first && balance_violation(g, options.solver) <= kBalanceTolerance) return;
+  p.qp = to_string(options.qp);
+  const Accelerations full = initial_accelerations(g, {}, options.qp);
+  for (size_t i = 0; i < g.size(); ++i) {
+    p.blocks[i].accel = full.a[i];
+    p.blocks[i].alpha = full.alpha[i];
+    if (full.moving(i)) p.blocks[i].state = BlockState::kMoving;
+  }
+  if (!full.any_moving()) return;  // within tolerance: the QP is the judge of motion
+  p.balanced = false;
+  // Causes: a block of row r is a cause when it moves with every row below r held fixed. If no block of rows
+  // [r, r') moves in the subsystem "rows >= r free", that subsystem's solution is also the solution with rows
+  // < r' fixed, so one QP answers every row up to and including its lowest moving row.
+  const Accelerations* current = &full;
+  Accelerations sub;
+  int from_row = 0;
+  while (from_row < g.num_rows()) {
+    int lowest = -1;
+    for (int r = from_row; r < g.num_rows() && lowest < 0; ++r) {
+      for (int i : g.rows[static_cast<size_t>(r)]) {
+        if (current->moving(static_cast<size_t>(i))) {
+          lowest = r;
+          break;
+        }
+      }
+    }
+    if (lowest < 0) break;
+    for (int i : g.rows[static_cast<size_t>(lowest)]) {
+      if (current->moving(static_cast<size_t>(i))) p.blocks[static_cast<size_t>(i)].state = BlockState::kCause;
+    }
+    from_row = lowest + 1;
+    if (from_row >= g.num_rows()) break;
+    std::vector<char> free(g.size(), 0);
+    for (size_t i = 0; i < g.size(); ++i) free[i] = g.row[i] >= from_row ? 1 : 0;
+    sub = initial_accelerations(g, free, options.qp);
+    current = &sub;
+  }
+}
+
+}  // namespace
+
+double balance_violation(const ContactGraph& g, const std::string& solver, const std::vector<char>& free) {
+  opt::Problem problem;
+  std::vector<int> contact_var;
+  const std::vector<int> row = add_equilibrium(g, free, problem, contact_var);
+  for (int r = 0; r < problem.num_rows(); ++r) {
+    problem.set(r, problem.add_variable(0.0, opt::kInfinity, 1.0), 1.0);
+    problem.set(r, problem.add_variable(0.0, opt::kInfinity, 1.0), -1.0);
+  }
+  if (problem.num_rows() == 0) return 0.0;
+  const opt::SolveResult result = solve_lp(problem, solver, "balance");
+  return std::max(0.0, result.objective);
+}
+
+std::vector<int64_t> Prediction::causes() const {
+  std::vector<int64_t> ids;
+  for (const auto& b : blocks) {
+    if (b.state == BlockState::kCause) ids.push_back(b.id);
+  }
+  return ids;
+}
+
+std::vector<int64_t> Prediction::moving() const {
+  std::vector<int64_t> ids;
+  for (const auto& b : blocks) {
+    if (b.state != BlockState::kStable) ids.push_back(b.id);
+  }
+  return ids;
+}
+
+double overhang(const Stack& stack) {
+  double rightmost = -opt::kInfinity;
+  for (const Block& b : stack.blocks) rightmost = std::max(rightmost, b.x + stack.block_length);
+  if (stack.blocks.empty()) return 0.0;
+  return std::max(0.0, (rightmost - stack.table_edge) / stack.block_length);
+}
+
+int32_t score_of(double overhang_in_block_lengths) {
+  const double s = std::round(100.0 * overhang_in_block_lengths);
+  return static_cast<int32_t>(std::clamp(s, -2e9, 2e9));
+}
+
+Prediction predict(const Stack& stack, const PredictOptions& options) {
+  validate(stack, options.limits);
+  const ContactGraph graph = build_contacts(stack);
+  Prediction p;
+  p.annotator = to_string(options.annotator);
+  p.solver = options.solver;
+  fill_common(stack, p);
+  switch (options.annotator) {
+    case Annotator::kBalance: annotate_balance(graph, options, p); break;
+    case Annotator::kPaper: annotate_paper(graph, options, p); break;
+    case Annotator::kExact: annotate_exact(graph, options, p); break;
+  }
+  return p;
+}
+
+nlohmann::json to_json(const Prediction& p) {
+  nlohmann::json out;
+  out["balanced"] = p.balanced;
+  out["unbalanced"] = p.causes();
+  out["moving"] = p.moving();
+  out["overhang"] = p.overhang;
+  out["score"] = p.score;
+  out["annotator"] = p.annotator;
+  out["solver"] = p.solver;
+  if (!p.qp.empty()) out["qp"] = p.qp;
+  nlohmann::json blocks = nlohmann::json::array();
+  for (const auto& b : p.blocks) {
+    static const char* const kStates[] = {"stable", "moving", "cause"};
+    nlohmann::json jb = {{"id", b.id}, {"state", kStates[static_cast<int>(b.state)]}};
+    if (!p.qp.empty()) {
+      jb["accel"] = b.accel;
+      jb["alpha"] = b.alpha;
+    }
+    blocks.push_back(std::move(jb));
+  }
+  out["blocks"] = std::move(blocks);
+  return out;
+}
+
+Annotator parse_annotator(const std::string& name) {
+  if (name == "exact") return Annotator::kExact;
+  if (name == "paper") return Annotator::kPaper;
+  if (name == "balance") return Annotator::kBalance;
+  throw std::invalid_argument("unknown annotator \"" + name + "\" (expected exact, paper or balance)");
+}
+
+std::string to_string(Annotator annotator) {
+  switch (annotator) {
+    case Annotator::kExact: return "exact";
+    case Annotator::kPaper: return "paper";
+    case Annotator::kBalance: return "balance";
+  }
+  return "exact";
+}
+
+}  // namespace bricklayer::core
