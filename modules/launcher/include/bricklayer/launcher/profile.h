@@ -1,0 +1,54 @@
+// A launch profile: the whole desired state of one host in one declarative file
+// (launch/profiles/<name>.json), in the spirit of libbot2's procman. See modules/launcher/README.md.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace bricklayer::launcher {
+
+class ProfileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class RestartPolicy { kAlways, kOnFailure, kNever };
+
+struct ModuleSpec {
+  std::string name;                          // label in the launcher's output
+  std::vector<std::string> command;          // program and arguments (program: bare name or path)
+  std::vector<std::string> command_with_display;  // used instead of command when $DISPLAY is set
+  std::string heartbeat;                     // heartbeat_t.module to wait for; "" = no heartbeat
+  RestartPolicy restart = RestartPolicy::kAlways;
+  double ready_timeout_s = 10.0;             // heartbeat must arrive within this after a start
+  double heartbeat_timeout_s = 5.0;          // an up module silent this long is killed and restarted
+  std::vector<std::string> env;              // extra "NAME=value" entries
+};
+
+struct LoggerSpec {
+  std::string file = "logs/bricklayer-%Y%m%d-%H%M%S";  // strftime pattern, relative to the project root
+  int rotate = 10;       // keep FILE.0 .. FILE.<rotate-1>; 0 = never delete (increment instead)
+  double split_mb = 100; // start a new file beyond this size
+};
+
+struct Profile {
+  std::string name;
+  std::string description;
+  std::vector<ModuleSpec> modules;           // start order
+  std::optional<LoggerSpec> logger;          // lcm-logger, started first and stopped last
+  double duration_s = 0;                     // stop by itself after this long; 0 = until Ctrl-C
+  double headless_duration_s = 0;            // the default duration when $DISPLAY is unset
+  double stop_timeout_s = 5;                 // SIGTERM deadline before SIGKILL
+  std::vector<std::string> notes;            // printed once everything is up ("where to look")
+};
+
+// Throws ProfileError naming the file and key for unknown keys, missing keys and bad values.
+Profile parse_profile(const std::string& json_text, const std::string& name);
+Profile load_profile(const std::string& path);
+
+RestartPolicy parse_restart_policy(const std::string& text);
+std::string to_string(RestartPolicy policy);
+
+}  // namespace bricklayer::launcher

@@ -1,0 +1,98 @@
+// bricklayer-launch: starts one host's set of Bricklayer processes from a declarative profile
+// (launch/profiles/<name>.json), waits for each one's heartbeat, restarts what dies, runs lcm-logger,
+// and stops everything cleanly. Usually started through launch/bricklayer PROFILE.
+//
+// Subscribes: BL_HEARTBEAT (heartbeat_t). Publishes: BL_HEARTBEAT (module "launcher").
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+
+#include "bricklayer/common/flags.h"
+#include "bricklayer/common/lcm_url.h"
+#include "bricklayer/common/log.h"
+#include "bricklayer/launcher/profile.h"
+#include "bricklayer/launcher/supervisor.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace bricklayer;
+
+fs::path self_dir() {
+  std::error_code ec;
+  fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? fs::current_path() : exe.parent_path();
+}
+
+int Main(int argc, char** argv) {
+  Flags flags("bricklayer-launch",
+              "Starts the processes of a launch profile in order, reports each one up when its heartbeat arrives,\n"
+              "restarts any that dies (counted; BRICKLAYER_RESTARTS is passed on), records the bus with lcm-logger\n"
+              "into logs/, and on Ctrl-C / SIGTERM / --duration stops everything (SIGTERM, deadline, SIGKILL)\n"
+              "and prints a summary. PROFILE is a name in ROOT/launch/profiles/ or a path to a .json file.");
+  flags.add_positional("PROFILE", "profile name (demo, all-in-one, camera-host, projector-host) or file");
+  flags.add("root", "", "project root: working directory of every module (default: found from this binary)");
+  flags.add("bin-dir", "", "where bare program names are looked up before PATH (default: this binary's directory)");
+  flags.add("duration", "", "stop by itself after this many seconds (default: the profile's; 0 = until Ctrl-C)");
+  flags.add("lcm-url", "", "LCM URL for every module (default: LCM_DEFAULT_URL, else host-only ttl=0)");
+  flags.add_bool("allow-routed", "allow a udpm ttl above 1 (routed beyond the LAN)");
+  flags.add("log-level", "info", "debug, info, warn or error");
+  if (!flags.parse(argc, argv)) return 0;
+  log::set_level(log::parse_level(flags.get("log-level")));
+
+  fs::path bin = flags.get("bin-dir").empty() ? self_dir() : fs::path(flags.get("bin-dir"));
+  fs::path root = flags.get("root");
+  if (root.empty()) {
+    root = fs::current_path();
+    for (fs::path p = bin; !p.empty() && p != p.root_path(); p = p.parent_path()) {
+      if (fs::exists(p / "launch" / "profiles")) {
+        root = p;
+        break;
+      }
+    }
+  }
+  root = fs::absolute(root);
+
+  std::string name = flags.positional().at(0);
+  fs::path profile_path = (name.find('/') != std::string::npos || fs::path(name).extension() == ".json")
+                              ? fs::path(name)
+                              : root / "launch" / "profiles" / (name + ".json");
+  launcher::Profile profile;
+  try {
+    profile = launcher::load_profile(profile_path.string());
+  } catch (const launcher::ProfileError& e) {
+    throw FlagError(e.what());
+  }
+
+  launcher::SupervisorOptions options;
+  options.root = root.string();
+  options.bin_dirs = {fs::absolute(bin).string()};
+  options.lcm_url = resolve_lcm_url(flags.get("lcm-url"));
+  try {
+    check_lcm_url(options.lcm_url, flags.get_bool("allow-routed"));
+  } catch (const std::invalid_argument& e) {
+    throw FlagError(e.what());
+  }
+  const char* display = std::getenv("DISPLAY");
+  options.display = display && *display;
+  options.duration_s = profile.duration_s;
+  if (options.duration_s == 0 && !options.display) options.duration_s = profile.headless_duration_s;
+  if (flags.was_set("duration")) {
+    options.duration_s = flags.get_double("duration");
+    if (options.duration_s < 0) throw FlagError("--duration must be >= 0 seconds");
+  }
+
+  std::unique_ptr<launcher::Supervisor> supervisor;
+  try {
+    supervisor = std::make_unique<launcher::Supervisor>(profile, options);
+  } catch (const launcher::ProfileError& e) {
+    throw FlagError(e.what());
+  }
+  return supervisor->run();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return bricklayer::run_main("bricklayer-launch", &Main, argc, argv); }

@@ -1,0 +1,156 @@
+#include "bricklayer/launcher/profile.h"
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+namespace bricklayer::launcher {
+namespace {
+
+using nlohmann::json;
+
+void check_keys(const json& obj, const std::set<std::string>& allowed, const std::string& where) {
+  if (!obj.is_object()) throw ProfileError(where + ": expected an object");
+  for (const auto& [key, value] : obj.items()) {
+    if (!allowed.count(key)) {
+      std::string list;
+      for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+      throw ProfileError(where + ": unknown key '" + key + "' (allowed: " + list + ")");
+    }
+  }
+}
+
+double number(const json& obj, const std::string& key, double fallback, const std::string& where, double min = 0) {
+  if (!obj.contains(key)) return fallback;
+  const json& v = obj.at(key);
+  if (!v.is_number()) throw ProfileError(where + ": '" + key + "' must be a number");
+  double d = v.get<double>();
+  if (!(d >= min)) throw ProfileError(where + ": '" + key + "' must be >= " + std::to_string(min));
+  return d;
+}
+
+std::vector<std::string> strings(const json& v, const std::string& where) {
+  if (!v.is_array()) throw ProfileError(where + ": expected an array of strings");
+  std::vector<std::string> out;
+  for (const auto& s : v) {
+    if (!s.is_string()) throw ProfileError(where + ": expected an array of strings");
+    out.push_back(s.get<std::string>());
+  }
+  return out;
+}
+
+ModuleSpec parse_module(const json& m, const std::string& where) {
+  check_keys(m, {"name", "command", "command_with_display", "heartbeat", "restart", "ready_timeout_s",
+                 "heartbeat_timeout_s", "env"},
+             where);
+  ModuleSpec spec;
+  if (!m.contains("name") || !m.at("name").is_string() || m.at("name").get<std::string>().empty())
+    throw ProfileError(where + ": 'name' (a non-empty string) is required");
+  spec.name = m.at("name").get<std::string>();
+  const std::string w = where + " '" + spec.name + "'";
+  if (!m.contains("command")) throw ProfileError(w + ": 'command' is required");
+  spec.command = strings(m.at("command"), w + " command");
+  if (spec.command.empty()) throw ProfileError(w + ": 'command' is empty");
+  if (m.contains("command_with_display")) {
+    spec.command_with_display = strings(m.at("command_with_display"), w + " command_with_display");
+    if (spec.command_with_display.empty()) throw ProfileError(w + ": 'command_with_display' is empty");
+  }
+  spec.heartbeat = spec.name;
+  if (m.contains("heartbeat")) {
+    if (!m.at("heartbeat").is_string())
+      throw ProfileError(w + ": 'heartbeat' must be the module name in its heartbeat, or \"\" for none");
+    spec.heartbeat = m.at("heartbeat").get<std::string>();
+  }
+  if (m.contains("restart")) {
+    if (!m.at("restart").is_string()) throw ProfileError(w + ": 'restart' must be a string");
+    try {
+      spec.restart = parse_restart_policy(m.at("restart").get<std::string>());
+    } catch (const ProfileError& e) {
+      throw ProfileError(w + ": " + e.what());
+    }
+  }
+  spec.ready_timeout_s = number(m, "ready_timeout_s", spec.ready_timeout_s, w, 0.1);
+  spec.heartbeat_timeout_s = number(m, "heartbeat_timeout_s", spec.heartbeat_timeout_s, w, 1.5);
+  if (m.contains("env")) {
+    spec.env = strings(m.at("env"), w + " env");
+    for (const auto& e : spec.env)
+      if (e.find('=') == std::string::npos || e[0] == '=') throw ProfileError(w + ": env entry '" + e + "' is not NAME=value");
+  }
+  return spec;
+}
+
+}  // namespace
+
+RestartPolicy parse_restart_policy(const std::string& text) {
+  if (text == "always") return RestartPolicy::kAlways;
+  if (text == "on-failure") return RestartPolicy::kOnFailure;
+  if (text == "never") return RestartPolicy::kNever;
+  throw ProfileError("restart policy '" + text + "' is not one of always, on-failure, never");
+}
+
+std::string to_string(RestartPolicy policy) {
+  switch (policy) {
+    case RestartPolicy::kAlways: return "always";
+    case RestartPolicy::kOnFailure: return "on-failure";
+    case RestartPolicy::kNever: return "never";
+  }
+  return "?";
+}
+
+Profile parse_profile(const std::string& json_text, const std::string& name) {
+  json doc;
+  try {
+    doc = json::parse(json_text);
+  } catch (const json::exception& e) {
+    throw ProfileError("profile " + name + ": not valid JSON: " + e.what());
+  }
+  const std::string where = "profile " + name;
+  check_keys(doc, {"description", "modules", "logger", "duration_s", "headless_duration_s", "stop_timeout_s", "notes"},
+             where);
+  Profile p;
+  p.name = name;
+  if (doc.contains("description")) {
+    if (!doc.at("description").is_string()) throw ProfileError(where + ": 'description' must be a string");
+    p.description = doc.at("description").get<std::string>();
+  }
+  if (!doc.contains("modules") || !doc.at("modules").is_array())
+    throw ProfileError(where + ": 'modules' (an array, in start order) is required");
+  std::set<std::string> names;
+  for (size_t i = 0; i < doc.at("modules").size(); ++i) {
+    ModuleSpec spec = parse_module(doc.at("modules")[i], where + " module #" + std::to_string(i + 1));
+    if (!names.insert(spec.name).second) throw ProfileError(where + ": two modules are named '" + spec.name + "'");
+    p.modules.push_back(std::move(spec));
+  }
+  if (doc.contains("logger") && !doc.at("logger").is_null()) {
+    const json& l = doc.at("logger");
+    check_keys(l, {"file", "rotate", "split_mb"}, where + " logger");
+    LoggerSpec spec;
+    if (l.contains("file")) {
+      if (!l.at("file").is_string() || l.at("file").get<std::string>().empty())
+        throw ProfileError(where + " logger: 'file' must be a non-empty string");
+      spec.file = l.at("file").get<std::string>();
+    }
+    spec.rotate = static_cast<int>(number(l, "rotate", spec.rotate, where + " logger"));
+    spec.split_mb = number(l, "split_mb", spec.split_mb, where + " logger", 0.01);
+    p.logger = spec;
+  }
+  if (p.modules.empty() && !p.logger) throw ProfileError(where + ": nothing to launch (no modules, no logger)");
+  p.duration_s = number(doc, "duration_s", 0, where);
+  p.headless_duration_s = number(doc, "headless_duration_s", 0, where);
+  p.stop_timeout_s = number(doc, "stop_timeout_s", 5, where, 0.1);
+  if (doc.contains("notes")) p.notes = strings(doc.at("notes"), where + " notes");
+  return p;
+}
+
+Profile load_profile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ProfileError("cannot read profile '" + path + "' (see launch/profiles/ for the available ones)");
+  std::stringstream text;
+  text << in.rdbuf();
+  return parse_profile(text.str(), std::filesystem::path(path).stem().string());
+}
+
+}  // namespace bricklayer::launcher

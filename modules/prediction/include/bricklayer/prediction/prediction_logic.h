@@ -1,0 +1,46 @@
+// The logic of bricklayer-prediction without the bus: stack_t in, prediction_t out.
+// A pure function of the input message (no clock, no state), so the process, bricklayer-replay and the
+// tests all compute byte-identical answers.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "bricklayer/core/predict.h"
+#include "bricklayer/prediction_t.hpp"
+#include "bricklayer/stack_t.hpp"
+
+namespace bricklayer::prediction {
+
+struct PredictionConfig {
+  std::string annotator = "exact";  // exact, paper or balance (core::parse_annotator)
+  std::string solver = "clp";       // LP backend passed to core::predict
+  size_t max_blocks = 1000;         // larger stacks are answered with STATUS_INVALID_STACK
+};
+
+// Upper bound of an encoded stack_t with max_blocks blocks: larger messages on BL_STACK are rejected
+// before decoding (counted errors).
+size_t max_stack_message_bytes(size_t max_blocks);
+
+class PredictionLogic {
+ public:
+  // Throws std::invalid_argument for an unknown annotator or a max_blocks of 0.
+  explicit PredictionLogic(PredictionConfig config);
+
+  // Always answers: failures become a status and a one-line error, never an exception.
+  //   stack.status != STATUS_OK            -> STATUS_NO_STACK
+  //   num_blocks != blocks.size(), too many blocks, core::StackError -> STATUS_INVALID_STACK
+  //   core::SolverError (or any other failure of the core)           -> STATUS_SOLVER_ERROR
+  prediction_t answer(const stack_t& stack) const;
+
+  const PredictionConfig& config() const { return config_; }
+
+ private:
+  PredictionConfig config_;
+  core::PredictOptions options_;
+};
+
+// The core's own data model for a stack_t (no validation).
+core::Stack to_core_stack(const stack_t& stack);
+
+}  // namespace bricklayer::prediction

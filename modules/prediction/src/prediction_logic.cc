@@ -1,0 +1,97 @@
+#include "bricklayer/prediction/prediction_logic.h"
+
+#include <stdexcept>
+
+#include "bricklayer/block_prediction_t.hpp"
+
+namespace bricklayer::prediction {
+namespace {
+
+prediction_t empty_answer(const stack_t& stack, const PredictionConfig& config, int8_t status, std::string error) {
+  prediction_t p{};
+  p.utime = stack.utime;
+  p.frame_number = stack.frame_number;
+  p.status = status;
+  p.error = std::move(error);
+  p.balanced = false;
+  p.overhang = 0.0;
+  p.score = 0;
+  p.annotator = config.annotator;
+  p.solver = config.solver;
+  p.num_blocks = 0;
+  return p;
+}
+
+}  // namespace
+
+size_t max_stack_message_bytes(size_t max_blocks) {
+  // fingerprint 8 + utime, frame_number, 3 doubles 40 + status 1 + num_blocks 4; one block_t is
+  // id 8 + row 4 + x 8 + corners 64 + confidence 8 = 92 bytes. Slack for future additive fields.
+  return 256 + 92 * max_blocks;
+}
+
+PredictionLogic::PredictionLogic(PredictionConfig config) : config_(std::move(config)) {
+  if (config_.max_blocks == 0) throw std::invalid_argument("--max-blocks must be at least 1");
+  options_.annotator = core::parse_annotator(config_.annotator);
+  options_.solver = config_.solver;
+}
+
+core::Stack to_core_stack(const stack_t& stack) {
+  core::Stack s;
+  s.block_length = stack.block_length;
+  s.block_height = stack.block_height;
+  s.table_edge = stack.table_edge;
+  s.blocks.reserve(stack.blocks.size());
+  for (const auto& b : stack.blocks) s.blocks.push_back(core::Block{b.id, b.row, b.x});
+  return s;
+}
+
+prediction_t PredictionLogic::answer(const stack_t& stack) const {
+  if (stack.status != stack_t::STATUS_OK) {
+    return empty_answer(stack, config_, prediction_t::STATUS_NO_STACK,
+                        stack.status == stack_t::STATUS_NO_FRAME   ? "no frame (the camera frame could not be decoded)"
+                        : stack.status == stack_t::STATUS_NO_BOARD ? "no board (the board could not be seen)"
+                                                                   : "stack status " + std::to_string(stack.status));
+  }
+  if (stack.num_blocks < 0 || static_cast<size_t>(stack.num_blocks) != stack.blocks.size()) {
+    return empty_answer(stack, config_, prediction_t::STATUS_INVALID_STACK,
+                        "num_blocks is " + std::to_string(stack.num_blocks) + " but the stack carries " +
+                            std::to_string(stack.blocks.size()) + " blocks");
+  }
+  if (stack.blocks.size() > config_.max_blocks) {
+    return empty_answer(stack, config_, prediction_t::STATUS_INVALID_STACK,
+                        "stack has " + std::to_string(stack.blocks.size()) + " blocks, more than --max-blocks=" +
+                            std::to_string(config_.max_blocks));
+  }
+  core::Prediction verdict;
+  try {
+    core::Stack s = to_core_stack(stack);
+    core::validate(s, core::StackLimits{config_.max_blocks});
+    verdict = core::predict(s, options_);
+  } catch (const core::StackError& e) {
+    return empty_answer(stack, config_, prediction_t::STATUS_INVALID_STACK, e.what());
+  } catch (const core::SolverError& e) {
+    return empty_answer(stack, config_, prediction_t::STATUS_SOLVER_ERROR, e.what());
+  } catch (const std::exception& e) {
+    return empty_answer(stack, config_, prediction_t::STATUS_SOLVER_ERROR, std::string("unexpected: ") + e.what());
+  }
+  prediction_t p = empty_answer(stack, config_, prediction_t::STATUS_OK, "");
+  p.balanced = verdict.balanced;
+  p.overhang = verdict.overhang;
+  p.score = verdict.score;
+  if (!verdict.annotator.empty()) p.annotator = verdict.annotator;
+  if (!verdict.solver.empty()) p.solver = verdict.solver;
+  p.blocks.reserve(verdict.blocks.size());
+  for (const auto& v : verdict.blocks) {
+    block_prediction_t b{};
+    b.id = v.id;
+    b.state = static_cast<int8_t>(v.state);
+    b.accel = v.accel;
+    b.alpha = v.alpha;
+    p.blocks.push_back(b);
+  }
+  p.num_blocks = static_cast<int32_t>(p.blocks.size());
+  return p;
+}
+
+}  // namespace bricklayer::prediction
