@@ -1,0 +1,99 @@
+// Blocks from one camera frame: the seed paper's line scan made robust.
+//
+// Pipeline (all in the rectified board frame, see board_frame.h):
+//   green channel -> rectify -> per row band: average along the line direction (upper and lower half)
+//   -> subtract the projector's predicted leakage into green -> divide by a local background (1-D max
+//   filter + box smoothing: shadows, gradients and vignetting cancel) -> dark dips with sub-pixel
+//   centroids -> reject wide dips (out-of-focus hands and bodies) and dips missing from one half of the
+//   band (not a full-height line) -> pair lines one block length apart (a line may end one block and
+//   start the next when blocks touch) -> block x from the pair's midpoint, row from the band.
+// Pure function of (frame, calibration, projector image): deterministic, no state between frames.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "bricklayer/calibration_t.hpp"
+#include "bricklayer/common/board.h"
+#include "bricklayer/vision/board_frame.h"
+
+namespace bricklayer::vision {
+
+struct DetectorConfig {
+  double min_depth = 0.10;         // line darkness needed, as a fraction of the local background (0..1)
+  double max_line_width = 0.10;    // block lengths; wider dark dips are out-of-focus shapes, not lines
+  double length_tolerance = 0.10;  // block lengths; how far a line pair may be from one block length apart
+  double band_margin = 0.2;        // fraction of the block height ignored at the top and bottom of a row band
+  double min_board_level = 12.0;   // mean green (0..255) of the board area below which it is not seen
+  // Green row of the projector-to-camera colour mixing used before calibration (camera green per unit
+  // projector B, G, R drive); calibration_t.colour_mixing replaces it.
+  std::array<double, 3> default_green_mixing = {0.12, 0.60, 0.14};
+  // End-line width in block lengths, used only when a frame has too few separate blocks to measure it.
+  double line_width = 1.0 / 40.0;
+};
+
+struct DetectedBlock {
+  int32_t row = 0;
+  double x = 0.0;                  // left end, block lengths from the surface edge
+  double left_px = 0.0;            // left end in the rectified frame, pixels
+  std::array<double, 4> corner_u{};  // camera pixels: left-bottom, right-bottom, right-top, left-top
+  std::array<double, 4> corner_v{};
+  double confidence = 0.0;         // 0..1
+};
+
+struct Detection {
+  enum Status { kOk = 0, kNoFrame = 1, kNoBoard = 2 };
+  Status status = kOk;
+  std::vector<DetectedBlock> blocks;  // sorted: bottom row first, left to right
+  int lines = 0;                      // accepted line profiles
+  int rejected_wide = 0;              // dark dips rejected as out of focus
+};
+
+class Detector {
+ public:
+  explicit Detector(const BoardGeometry& geometry = {}, const DetectorConfig& config = {});
+
+  // Switches to a calibrated board frame (remap tables built here, once). Throws std::invalid_argument
+  // on an unusable calibration, keeping the previous one.
+  void set_calibration(const calibration_t& calibration);
+  const BoardFrame& frame() const { return frame_; }
+  const DetectorConfig& config() const { return config_; }
+
+  // What the projector shows (BGR, any size; `projector_size` is the projector's full resolution the
+  // image was scaled from). Its predicted green leakage is subtracted from every following frame.
+  void set_projector_image(const cv::Mat& bgr, cv::Size projector_size);
+  void clear_projector_image();
+
+  // Detects blocks in a BGR8 or GRAY8 frame. A frame whose size differs from the calibration's camera
+  // size, or an empty one, gives kNoFrame.
+  Detection detect(const cv::Mat& frame);
+
+ private:
+  struct Band {
+    int row;
+    int y0, y1, y2;  // upper half [y0, y1), lower half [y1, y2) in rectified pixels
+  };
+  void prepare(cv::Size rectified_size);
+  void find_lines(const float* up, const float* lo, int width, std::vector<double>& lines,
+                  std::vector<double>& depths, int& rejected);
+
+  DetectorConfig config_;
+  BoardGeometry default_geometry_;
+  BoardFrame frame_;
+  cv::Matx33d camera_to_projector_;
+  cv::Size projector_size_;
+  std::array<double, 3> green_mixing_;
+  cv::Mat projector_image_;  // BGR as published
+  // Cached per rectified size: bands, and the projector leakage averaged over each band half.
+  cv::Size prepared_size_{-1, -1};
+  std::vector<Band> bands_;
+  std::vector<std::vector<float>> leak_up_, leak_lo_;
+  bool leak_valid_ = false;
+  // Scratch buffers reused across frames.
+  std::vector<float> full_, bg_, mx_, d_, du_, dl_;
+};
+
+}  // namespace bricklayer::vision

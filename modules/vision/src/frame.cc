@@ -1,0 +1,253 @@
+#include "bricklayer/vision/frame.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace bricklayer::vision {
+namespace {
+
+bool jpeg_complete(const std::vector<uint8_t>& d) {
+  // SOI at the start, EOI at the end (libjpeg "decodes" truncated files into grey-filled frames).
+  if (d.size() < 4 || d[0] != 0xFF || d[1] != 0xD8) return false;
+  size_t end = d.size();
+  while (end > 2 && d[end - 1] == 0) --end;  // tolerate zero padding after EOI
+  return d[end - 2] == 0xFF && d[end - 1] == 0xD9;
+}
+
+bool png_complete(const std::vector<uint8_t>& d) {
+  static const uint8_t sig[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+  static const uint8_t iend[8] = {'I', 'E', 'N', 'D', 0xAE, 0x42, 0x60, 0x82};
+  if (d.size() < 8 + 12) return false;
+  for (int i = 0; i < 8; ++i)
+    if (d[i] != sig[i]) return false;
+  for (int i = 0; i < 8; ++i)
+    if (d[d.size() - 8 + i] != iend[i]) return false;
+  return true;
+}
+
+void set_error(std::string* error, std::string text) {
+  if (error) *error = std::move(text);
+}
+
+}  // namespace
+
+cv::Mat decode_image(const image_t& image, std::string* error) {
+  const std::string what = "frame " + std::to_string(image.frame_number) + ": ";
+  if (image.width <= 0 || image.height <= 0 || image.width > kMaxFrameSide || image.height > kMaxFrameSide) {
+    set_error(error, what + "width/height " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                         " outside 1.." + std::to_string(kMaxFrameSide));
+    return {};
+  }
+  if (image.size < 0 || static_cast<size_t>(image.size) != image.data.size()) {
+    set_error(error, what + "size field " + std::to_string(image.size) + " does not match " +
+                         std::to_string(image.data.size()) + " data bytes");
+    return {};
+  }
+  if (image.data.empty()) {
+    set_error(error, what + "empty");
+    return {};
+  }
+  const size_t pixels = static_cast<size_t>(image.width) * static_cast<size_t>(image.height);
+  cv::Mat out;
+  switch (image.format) {
+    case image_t::FORMAT_GRAY8:
+    case image_t::FORMAT_BGR8: {
+      const int channels = image.format == image_t::FORMAT_GRAY8 ? 1 : 3;
+      if (image.data.size() != pixels * channels) {
+        set_error(error, what + "expected " + std::to_string(pixels * channels) + " bytes for " +
+                             std::to_string(image.width) + "x" + std::to_string(image.height) + ", got " +
+                             std::to_string(image.data.size()));
+        return {};
+      }
+      cv::Mat view(image.height, image.width, channels == 1 ? CV_8UC1 : CV_8UC3,
+                   const_cast<uint8_t*>(image.data.data()));
+      return view.clone();
+    }
+    case image_t::FORMAT_JPEG:
+    case image_t::FORMAT_PNG: {
+      const bool jpeg = image.format == image_t::FORMAT_JPEG;
+      if (jpeg ? !jpeg_complete(image.data) : !png_complete(image.data)) {
+        set_error(error, what + (jpeg ? "not a complete JPEG (truncated or corrupt)" : "not a complete PNG (truncated or corrupt)"));
+        return {};
+      }
+      try {
+        out = cv::imdecode(image.data, cv::IMREAD_UNCHANGED);
+      } catch (const cv::Exception& e) {
+        set_error(error, what + "undecodable: " + e.what());
+        return {};
+      }
+      if (out.empty()) {
+        set_error(error, what + "undecodable " + (jpeg ? "JPEG" : "PNG"));
+        return {};
+      }
+      if (out.depth() != CV_8U) {
+        cv::Mat eight;
+        out.convertTo(eight, CV_8U, out.depth() == CV_16U ? 1.0 / 257.0 : 1.0);
+        out = eight;
+      }
+      if (out.channels() == 4) {
+        cv::Mat bgr;
+        cv::cvtColor(out, bgr, cv::COLOR_BGRA2BGR);
+        out = bgr;
+      }
+      if (out.channels() != 1 && out.channels() != 3) {
+        set_error(error, what + "unsupported channel count " + std::to_string(out.channels()));
+        return {};
+      }
+      if (out.cols != image.width || out.rows != image.height) {
+        set_error(error, what + "decoded " + std::to_string(out.cols) + "x" + std::to_string(out.rows) +
+                             " but the message says " + std::to_string(image.width) + "x" + std::to_string(image.height));
+        return {};
+      }
+      return out;
+    }
+    default:
+      set_error(error, what + "unknown format " + std::to_string(image.format));
+      return {};
+  }
+}
+
+image_t encode_image(const cv::Mat& frame, int32_t format, int64_t utime, int64_t frame_number,
+                     const std::string& source, int jpeg_quality) {
+  image_t msg{};
+  msg.utime = utime;
+  msg.frame_number = frame_number;
+  msg.width = frame.cols;
+  msg.height = frame.rows;
+  msg.format = format;
+  msg.source = source;
+  if (format == image_t::FORMAT_JPEG) {
+    cv::imencode(".jpg", frame, msg.data, {cv::IMWRITE_JPEG_QUALITY, jpeg_quality});
+  } else if (format == image_t::FORMAT_PNG) {
+    cv::imencode(".png", frame, msg.data, {cv::IMWRITE_PNG_COMPRESSION, 1});
+  } else {
+    const cv::Mat c = frame.isContinuous() ? frame : frame.clone();
+    msg.data.assign(c.data, c.data + c.total() * c.elemSize());
+  }
+  msg.size = static_cast<int32_t>(msg.data.size());
+  return msg;
+}
+
+double block_height_blocks(const BoardFrame& frame) {
+  return frame.geometry().block_height_px / frame.geometry().block_length_px;
+}
+
+namespace {
+stack_t empty_stack(const BoardFrame& frame, int64_t utime, int64_t frame_number, int8_t status) {
+  stack_t s{};
+  s.utime = utime;
+  s.frame_number = frame_number;
+  s.block_length = 1.0;
+  s.block_height = block_height_blocks(frame);
+  s.table_edge = 0.0;
+  s.status = status;
+  s.num_blocks = 0;
+  return s;
+}
+
+block_t to_block(int64_t id, const DetectedBlock& b) {
+  block_t m{};
+  m.id = id;
+  m.row = b.row;
+  m.x = b.x;
+  for (int c = 0; c < 4; ++c) {
+    m.corner_u[c] = b.corner_u[c];
+    m.corner_v[c] = b.corner_v[c];
+  }
+  m.confidence = b.confidence;
+  return m;
+}
+}  // namespace
+
+stack_t no_frame_stack(const BoardFrame& frame, int64_t utime, int64_t frame_number) {
+  return empty_stack(frame, utime, frame_number, stack_t::STATUS_NO_FRAME);
+}
+
+stack_t to_stack_message(const Detection& detection, const BoardFrame& frame, int64_t utime, int64_t frame_number) {
+  stack_t s = empty_stack(frame, utime, frame_number, static_cast<int8_t>(detection.status));
+  for (size_t i = 0; i < detection.blocks.size(); ++i) s.blocks.push_back(to_block(static_cast<int64_t>(i), detection.blocks[i]));
+  s.num_blocks = static_cast<int32_t>(s.blocks.size());
+  return s;
+}
+
+stack_t to_stack_message(const std::vector<FilteredBlock>& blocks, const BoardFrame& frame, int64_t utime,
+                         int64_t frame_number) {
+  stack_t s = empty_stack(frame, utime, frame_number, stack_t::STATUS_OK);
+  for (const FilteredBlock& b : blocks) s.blocks.push_back(to_block(b.id, b.block));
+  s.num_blocks = static_cast<int32_t>(s.blocks.size());
+  return s;
+}
+
+std::string to_predict_json(const Detection& detection, const BoardFrame& frame) {
+  nlohmann::json j;
+  j["block_length"] = 1.0;
+  j["block_height"] = block_height_blocks(frame);
+  j["table_edge"] = 0.0;
+  j["blocks"] = nlohmann::json::array();
+  for (size_t i = 0; i < detection.blocks.size(); ++i) {
+    const DetectedBlock& b = detection.blocks[i];
+    j["blocks"].push_back({{"id", static_cast<int64_t>(i)}, {"row", b.row}, {"x", std::round(b.x * 1e6) / 1e6}});
+  }
+  return j.dump();
+}
+
+calibration_t parse_calibration_json(const std::string& text) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(std::string("calibration is not valid JSON: ") + e.what());
+  }
+  if (!j.is_object()) throw std::runtime_error("calibration must be a JSON object");
+  calibration_t c{};
+  auto number = [&](const char* key) -> double {
+    if (!j.contains(key) || !j[key].is_number())
+      throw std::runtime_error(std::string("calibration: missing or non-numeric '") + key + "'");
+    return j[key].get<double>();
+  };
+  auto array = [&](const char* key, double* out, size_t n) {
+    if (!j.contains(key) || !j[key].is_array() || j[key].size() != n)
+      throw std::runtime_error(std::string("calibration: '") + key + "' must be an array of " + std::to_string(n) + " numbers");
+    for (size_t i = 0; i < n; ++i) {
+      if (!j[key][i].is_number()) throw std::runtime_error(std::string("calibration: '") + key + "' must hold numbers");
+      out[i] = j[key][i].get<double>();
+    }
+  };
+  c.utime = j.contains("utime") && j["utime"].is_number_integer() ? j["utime"].get<int64_t>() : 0;
+  c.camera_width = static_cast<int32_t>(number("camera_width"));
+  c.camera_height = static_cast<int32_t>(number("camera_height"));
+  c.projector_width = static_cast<int32_t>(number("projector_width"));
+  c.projector_height = static_cast<int32_t>(number("projector_height"));
+  array("camera_matrix", c.camera_matrix, 4);
+  array("distortion", c.distortion, 5);
+  array("camera_to_projector", c.camera_to_projector, 9);
+  array("camera_to_board", c.camera_to_board, 9);
+  array("colour_mixing", c.colour_mixing, 9);
+  if (j.contains("ambient_bgr")) array("ambient_bgr", c.ambient_bgr, 3);
+  c.block_height = number("block_height");
+  if (j.contains("reprojection_error_mean_px")) c.reprojection_error_mean_px = number("reprojection_error_mean_px");
+  if (j.contains("reprojection_error_max_px")) c.reprojection_error_max_px = number("reprojection_error_max_px");
+  return c;
+}
+
+calibration_t load_calibration_json(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read calibration file '" + path + "'");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // An LCM-encoded calibration_t (as lcm-logger payloads or a saved message) is accepted too.
+  calibration_t c{};
+  if (!text.empty() && text.front() != '{' &&
+      c.decode(text.data(), 0, static_cast<int>(text.size())) == static_cast<int>(text.size()))
+    return c;
+  return parse_calibration_json(text);
+}
+
+}  // namespace bricklayer::vision

@@ -1,0 +1,348 @@
+// bricklayer-vision: blocks from camera frames.
+//
+// Subscribes: BL_IMAGE (image_t: JPEG, PNG, GRAY8 or BGR8; newest wins) unless a direct source is given
+//             (--camera N, --video FILE, --images DIR), BL_CALIBRATION (calibration_t: rectification,
+//             colour mixing), BL_PROJECTOR (projector_state_t: what the projector shows, whose red/blue
+//             leakage into green is subtracted).
+// Publishes:  BL_STACK (stack_t, one per frame, carrying the frame's utime and frame_number;
+//             STATUS_NO_FRAME for a corrupt, empty, truncated or wrongly sized frame), BL_TIMING
+//             (timing_t, stage "detect"), BL_HEARTBEAT (counters; values: blocks, lines, rejected_wide).
+// Offline:    --images DIR --json prints one bricklayer-predict input line per image (name order),
+//             without the bus and without temporal filtering.
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "bricklayer/common/board.h"
+#include "bricklayer/common/channels.h"
+#include "bricklayer/common/flags.h"
+#include "bricklayer/common/lcm_url.h"
+#include "bricklayer/common/log.h"
+#include "bricklayer/common/module.h"
+#include "bricklayer/projector_state_t.hpp"
+#include "bricklayer/timing_t.hpp"
+#include "bricklayer/vision/detector.h"
+#include "bricklayer/vision/frame.h"
+#include "bricklayer/vision/temporal_filter.h"
+
+namespace bricklayer::vision {
+namespace {
+
+constexpr const char* kModuleName = "vision";
+
+std::vector<std::filesystem::path> list_images(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw std::runtime_error("--images: '" + dir + "' is not a directory");
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (!entry.is_regular_file()) continue;
+    std::string ext = entry.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".pgm" || ext == ".ppm" ||
+        ext == ".tif" || ext == ".tiff")
+      files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end(), [](const fs::path& a, const fs::path& b) {
+    return a.filename().string() < b.filename().string();
+  });
+  return files;
+}
+
+cv::Mat read_image_file(const std::filesystem::path& path) {
+  try {
+    return cv::imread(path.string(), cv::IMREAD_COLOR);
+  } catch (const cv::Exception&) {
+    return {};
+  }
+}
+
+// --images DIR --json: one predict-input line per image, no bus, no filter.
+int run_offline(const std::string& dir, Detector& detector) {
+  int failures = 0;
+  for (const auto& path : list_images(dir)) {
+    const cv::Mat frame = read_image_file(path);
+    Detection d;
+    if (frame.empty()) {
+      d.status = Detection::kNoFrame;
+    } else {
+      d = detector.detect(frame);
+    }
+    if (d.status != Detection::kOk) {
+      ++failures;
+      log::warn(path.filename().string(), ": ", d.status == Detection::kNoFrame ? "unreadable or wrongly sized image"
+                                                                                  : "board not visible");
+    }
+    std::cout << to_predict_json(d, detector.frame()) << "\n";
+  }
+  std::cout.flush();
+  return failures == 0 ? 0 : 1;
+}
+
+// Frames read in-process (camera, video, folder), instead of from the bus.
+class DirectSource {
+ public:
+  virtual ~DirectSource() = default;
+  // Next frame, or empty when exhausted / failed; utime and frame number set.
+  virtual bool next(cv::Mat& frame, int64_t& utime, int64_t& frame_number) = 0;
+};
+
+class CaptureSource : public DirectSource {
+ public:
+  CaptureSource(std::unique_ptr<cv::VideoCapture> cap, bool live) : cap_(std::move(cap)), live_(live) {}
+  bool next(cv::Mat& frame, int64_t& utime, int64_t& frame_number) override {
+    if (!cap_->read(frame) || frame.empty()) return false;
+    frame_number = count_++;
+    utime = live_ ? wall_utime() : static_cast<int64_t>(cap_->get(cv::CAP_PROP_POS_MSEC) * 1000.0);
+    return true;
+  }
+
+ private:
+  std::unique_ptr<cv::VideoCapture> cap_;
+  bool live_;
+  int64_t count_ = 0;
+};
+
+class FolderSource : public DirectSource {
+ public:
+  FolderSource(const std::string& dir, double rate) : files_(list_images(dir)), period_us_(1e6 / rate) {}
+  bool next(cv::Mat& frame, int64_t& utime, int64_t& frame_number) override {
+    if (index_ >= files_.size()) return false;
+    frame = read_image_file(files_[index_]);
+    frame_number = static_cast<int64_t>(index_);
+    utime = static_cast<int64_t>(index_ * period_us_);
+    ++index_;
+    return true;  // an unreadable file is a NO_FRAME stack, not the end
+  }
+
+ private:
+  std::vector<std::filesystem::path> files_;
+  double period_us_;
+  size_t index_ = 0;
+};
+
+class Vision {
+ public:
+  Vision(const std::string& url, Detector detector, const TemporalFilterConfig& filter_config, bool filter,
+         std::unique_ptr<DirectSource> source, double rate)
+      : module_(kModuleName, url),
+        detector_(std::move(detector)),
+        filter_(filter_config),
+        use_filter_(filter),
+        source_(std::move(source)),
+        period_(std::chrono::microseconds(static_cast<int64_t>(1e6 / rate))),
+        frames_(module_.counters()),
+        stack_channel_(channel(kStackChannel)),
+        timing_channel_(channel(kTimingChannel)) {
+    if (!source_) {
+      module_.subscribe<image_t>(channel(kImageChannel), [this](const image_t& m) { HandleImage(m); },
+                                 64 << 20, 8);
+    }
+    module_.subscribe<calibration_t>(channel(kCalibrationChannel),
+                                     [this](const calibration_t& m) { HandleCalibration(m); });
+    module_.subscribe<projector_state_t>(channel(kProjectorChannel),
+                                         [this](const projector_state_t& m) { HandleProjector(m); });
+  }
+
+  int Run() {
+    next_frame_ = std::chrono::steady_clock::now();
+    return module_.run([this] { Tick(); }, 5);
+  }
+
+ private:
+  void HandleImage(const image_t& image) { frames_.put({image, wall_utime()}); }
+
+  void HandleCalibration(const calibration_t& calibration) {
+    detector_.set_calibration(calibration);  // throws on a bad calibration: counted error, previous kept
+    calibration_ = calibration;
+    filter_.reset();
+    log::info("calibration applied: board frame ", detector_.frame().size().width, "x",
+              detector_.frame().size().height, ", ", detector_.frame().geometry().block_length_px, " px per block");
+  }
+
+  void HandleProjector(const projector_state_t& state) {
+    std::string error;
+    const cv::Mat image = decode_image(state.image, &error);
+    if (image.empty()) throw std::runtime_error("projector image: " + error);
+    cv::Mat bgr = image;
+    if (image.channels() == 1) cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+    const cv::Size projector_size = calibration_ ? cv::Size(calibration_->projector_width, calibration_->projector_height)
+                                                 : cv::Size(kDefaultProjectorWidth, kDefaultProjectorHeight);
+    detector_.set_projector_image(bgr, projector_size);
+  }
+
+  void Tick() {
+    if (source_) {
+      if (std::chrono::steady_clock::now() < next_frame_ || source_done_) return;
+      next_frame_ += period_;
+      cv::Mat frame;
+      int64_t utime = 0, number = 0;
+      if (!source_->next(frame, utime, number)) {
+        source_done_ = true;
+        log::info("source exhausted after ", frames_seen_, " frames");
+        module_.set_status("source exhausted");
+        return;
+      }
+      ++module_.counters().received;
+      Process(frame, utime, number, wall_utime(), "");
+      return;
+    }
+    auto item = frames_.take();
+    if (!item) return;
+    std::string error;
+    const cv::Mat frame = decode_image(item->image, &error);
+    Process(frame, item->image.utime, item->image.frame_number, item->received_utime, error);
+  }
+
+  void Process(const cv::Mat& frame, int64_t utime, int64_t frame_number, int64_t received_utime,
+               const std::string& decode_error) {
+    ++frames_seen_;
+    const auto start = std::chrono::steady_clock::now();
+    Detection d;
+    if (frame.empty()) {
+      d.status = Detection::kNoFrame;
+    } else {
+      d = detector_.detect(frame);
+    }
+    stack_t out;
+    if (d.status == Detection::kNoFrame) {
+      ++module_.counters().errors;
+      log::warn(decode_error.empty() ? "frame " + std::to_string(frame_number) + ": empty or wrongly sized for the calibration"
+                                     : decode_error);
+      out = no_frame_stack(detector_.frame(), utime, frame_number);
+    } else if (d.status == Detection::kNoBoard) {
+      out = to_stack_message(d, detector_.frame(), utime, frame_number);
+    } else if (use_filter_) {
+      out = to_stack_message(filter_.update(d.blocks), detector_.frame(), utime, frame_number);
+    } else {
+      out = to_stack_message(d, detector_.frame(), utime, frame_number);
+    }
+    const int64_t elapsed =
+        std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - start).count();
+    module_.publish(stack_channel_, out);
+    timing_t t{};
+    t.utime = utime;
+    t.frame_number = frame_number;
+    t.module = kModuleName;
+    t.stage = "detect";
+    t.elapsed_us = elapsed;
+    t.received_utime = received_utime;
+    module_.lcm().publish(timing_channel_, &t);
+    module_.set_value("blocks", out.num_blocks);
+    module_.set_value("lines", d.lines);
+    module_.set_value("rejected_wide", d.rejected_wide);
+    module_.set_value("detect_ms", elapsed / 1000.0);
+    module_.set_status(d.status == Detection::kNoBoard ? "board not visible" : "ok");
+  }
+
+  struct Frame {
+    image_t image;
+    int64_t received_utime;
+  };
+  Module module_;  // declared first: owns the bus the handlers below use
+  Detector detector_;
+  TemporalFilter filter_;
+  bool use_filter_;
+  std::unique_ptr<DirectSource> source_;
+  bool source_done_ = false;
+  std::chrono::steady_clock::duration period_;
+  std::chrono::steady_clock::time_point next_frame_;
+  Latest<Frame> frames_;
+  std::optional<calibration_t> calibration_;
+  int64_t frames_seen_ = 0;
+  std::string stack_channel_, timing_channel_;
+};
+
+int Main(int argc, char** argv) {
+  Flags flags("bricklayer-vision", "Blocks from camera frames: image_t on BL_IMAGE (or a camera, video or folder) -> stack_t on BL_STACK.");
+  flags.add("lcm-url", "", "LCM URL (default: LCM_DEFAULT_URL, else host-only udpm ttl=0)");
+  flags.add("log-level", "info", "debug, info, warn or error");
+  flags.add("board", "", "board geometry JSON {edge_x_px, surface_y_px, block_length_px, block_height_px} used until a calibration arrives (default: the shared default setup)");
+  flags.add("calibration", "", "calibration file (JSON with calibration_t's fields, or an LCM-encoded calibration_t) to start with");
+  flags.add("camera", "", "read frames from this V4L2 camera (index or /dev/videoN) instead of BL_IMAGE");
+  flags.add("video", "", "read frames from this video file instead of BL_IMAGE");
+  flags.add("images", "", "read frames from the images in this folder (name order) instead of BL_IMAGE");
+  flags.add("rate", "30", "frames per second for --video and --images");
+  flags.add_bool("json", "with --images: print one bricklayer-predict input line per image and exit (no bus, no filter)");
+  flags.add_bool("no-filter", "publish raw detections (no temporal filter)");
+  flags.add("confirm", "2/3", "temporal filter: seen in N of the last M frames, as N/M");
+  flags.add("hold", "3", "temporal filter: frames a lost block is held");
+  flags.add("deadband", "0.01", "temporal filter: x changes smaller than this (block lengths) are not published");
+  if (!flags.parse(argc, argv)) return 0;
+  log::set_module(kModuleName);
+  log::set_level(log::parse_level(flags.get("log-level")));
+
+  BoardGeometry geometry;
+  if (!flags.get("board").empty()) geometry = load_board_geometry(flags.get("board"));
+  Detector detector(geometry);
+  if (!flags.get("calibration").empty()) {
+    try {
+      detector.set_calibration(load_calibration_json(flags.get("calibration")));
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(std::string("--calibration: ") + e.what());
+    }
+  }
+
+  const int sources = !flags.get("camera").empty() + !flags.get("video").empty() + !flags.get("images").empty();
+  if (sources > 1) throw FlagError("give at most one of --camera, --video, --images");
+  if (flags.get_bool("json")) {
+    if (flags.get("images").empty()) throw FlagError("--json needs --images DIR");
+    return run_offline(flags.get("images"), detector);
+  }
+
+  TemporalFilterConfig filter_config;
+  {
+    const std::string confirm = flags.get("confirm");
+    const auto slash = confirm.find('/');
+    try {
+      if (slash == std::string::npos) throw std::invalid_argument(confirm);
+      filter_config.confirm_hits = std::stoi(confirm.substr(0, slash));
+      filter_config.confirm_window = std::stoi(confirm.substr(slash + 1));
+    } catch (const std::exception&) {
+      throw FlagError("--confirm must be N/M, e.g. 2/3");
+    }
+    filter_config.hold_frames = static_cast<int>(flags.get_int("hold"));
+    filter_config.deadband = flags.get_double("deadband");
+    TemporalFilter check(filter_config);  // validates, throws with a fixable message
+  }
+  const double rate = flags.get_double("rate");
+  if (!(rate > 0 && rate <= 1000)) throw FlagError("--rate must be in (0, 1000]");
+
+  std::unique_ptr<DirectSource> source;
+  if (!flags.get("camera").empty()) {
+    const std::string cam = flags.get("camera");
+    auto cap = std::make_unique<cv::VideoCapture>();
+    const bool numeric = !cam.empty() && std::all_of(cam.begin(), cam.end(), ::isdigit);
+    const bool ok = numeric ? cap->open(std::stoi(cam), cv::CAP_V4L2) : cap->open(cam, cv::CAP_V4L2);
+    if (!ok) throw std::runtime_error("cannot open camera '" + cam + "'");
+    cap->set(cv::CAP_PROP_BUFFERSIZE, 1);
+    source = std::make_unique<CaptureSource>(std::move(cap), true);
+  } else if (!flags.get("video").empty()) {
+    auto cap = std::make_unique<cv::VideoCapture>(flags.get("video"));
+    if (!cap->isOpened()) throw std::runtime_error("cannot open video '" + flags.get("video") + "'");
+    source = std::make_unique<CaptureSource>(std::move(cap), false);
+  } else if (!flags.get("images").empty()) {
+    source = std::make_unique<FolderSource>(flags.get("images"), rate);
+  }
+
+  const std::string url = resolve_lcm_url(flags.get("lcm-url"));
+  check_lcm_url(url);
+  Module::install_signal_handlers();
+  Vision vision(url, std::move(detector), filter_config, !flags.get_bool("no-filter"), std::move(source), rate);
+  return vision.Run();
+}
+
+}  // namespace
+}  // namespace bricklayer::vision
+
+int main(int argc, char** argv) { return bricklayer::run_main("bricklayer-vision", &bricklayer::vision::Main, argc, argv); }
