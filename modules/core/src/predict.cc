@@ -47,7 +47,10 @@ std::vector<int> add_equilibrium(const ContactGraph& g, const std::vector<char>&
 }
 
 opt::SolveResult solve_lp(const opt::Problem& problem, const std::string& solver, const char* what) {
-  const opt::SolveResult result = opt::make_solver(solver)->solve(problem);
+  opt::SolverOptions options;
+  // SLSQP often stops (roundoff) with equality residuals of 1e-8..1e-6 on these problems.
+  options.feasibility_tolerance = solver == "nlopt" ? 1e-6 : 1e-9;
+  const opt::SolveResult result = opt::make_solver(solver)->solve(problem, options);
   if (result.status != opt::SolveStatus::kOptimal) {
     throw SolverError(std::string(what) + " LP (" + solver + "): " + opt::to_string(result.status) + ": " +
                       result.message);

@@ -27,7 +27,7 @@ enum class Annotator {
 // nonnegative contact forces can reach is at most this. See modules/core/README.md "Tolerance policy".
 inline constexpr double kBalanceTolerance = 1e-6;
 // A fictitious force (paper annotator) above this (units of block weight) makes its block red.
-inline constexpr double kFictitiousTolerance = 1e-7;
+inline constexpr double kFictitiousTolerance = 1e-6;
 
 struct PredictOptions {
   Annotator annotator = Annotator::kExact;

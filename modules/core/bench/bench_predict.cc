@@ -1,0 +1,161 @@
+// bricklayer-bench-predict: median and p99 latency and peak heap of predict() for each annotator x backend on
+// piles built as a player would (core::player_pile, fixed seeds), at several pile sizes.
+// Usage: bricklayer-bench-predict [--sizes 10,25,...] [--piles N] [--max-nlopt-blocks N] [--quick]
+#include <malloc.h>
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <new>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bricklayer/core/generate.h"
+#include "bricklayer/core/predict.h"
+
+// Heap accounting through operator new (CLP and Eigen allocate through it; NLopt's C core uses malloc and
+// is only seen in the process peak RSS).
+namespace {
+std::atomic<size_t> g_current{0};
+std::atomic<size_t> g_peak{0};
+}  // namespace
+
+void* operator new(size_t size) {
+  void* p = std::malloc(size ? size : 1);
+  if (!p) throw std::bad_alloc();
+  const size_t now = g_current.fetch_add(malloc_usable_size(p)) + malloc_usable_size(p);
+  size_t peak = g_peak.load();
+  while (now > peak && !g_peak.compare_exchange_weak(peak, now)) {
+  }
+  return p;
+}
+void operator delete(void* p) noexcept {
+  if (!p) return;
+  g_current.fetch_sub(malloc_usable_size(p));
+  std::free(p);
+}
+void operator delete(void* p, size_t) noexcept { operator delete(p); }
+void* operator new[](size_t size) { return operator new(size); }
+void operator delete[](void* p) noexcept { operator delete(p); }
+void operator delete[](void* p, size_t) noexcept { operator delete(p); }
+
+namespace {
+
+using namespace bricklayer::core;
+
+struct Config {
+  Annotator annotator;
+  std::string solver;
+  QpMethod qp;
+  bool lp_first;
+  std::string label;
+};
+
+double percentile(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::ceil(q * static_cast<double>(v.size()))) - (q > 0 ? 1 : 0));
+  return v[k];
+}
+
+std::vector<int> parse_sizes(const std::string& text) {
+  std::vector<int> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) out.push_back(std::stoi(item));
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<int> sizes{10, 25, 50, 60, 100, 200, 500, 1000};
+  int piles = 200;
+  int max_nlopt = 100;
+  std::string only;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "bricklayer-bench-predict: error: %s needs a value\n", a.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--sizes") sizes = parse_sizes(value());
+    else if (a == "--piles") piles = std::stoi(value());
+    else if (a == "--max-nlopt-blocks") max_nlopt = std::stoi(value());
+    else if (a == "--only") only = value();
+    else if (a == "--help") {
+      std::printf("bricklayer-bench-predict [--sizes 10,25,50,60,100,200,500,1000] [--piles 200] "
+                  "[--max-nlopt-blocks 100] [--only LABEL-SUBSTRING]\n");
+      return 0;
+    } else {
+      std::fprintf(stderr, "bricklayer-bench-predict: error: unknown argument %s\n", a.c_str());
+      return 2;
+    }
+  }
+  const std::vector<Config> configs{
+      {Annotator::kExact, "clp", QpMethod::kNnls, true, "exact clp+nnls"},
+      {Annotator::kExact, "clp", QpMethod::kNnls, false, "exact nnls (no LP)"},
+      {Annotator::kExact, "clp", QpMethod::kNlopt, true, "exact clp+nlopt-qp"},
+      {Annotator::kExact, "nlopt", QpMethod::kNnls, true, "exact nlopt+nnls"},
+      {Annotator::kPaper, "clp", QpMethod::kNnls, true, "paper clp"},
+      {Annotator::kPaper, "nlopt", QpMethod::kNnls, true, "paper nlopt"},
+      {Annotator::kBalance, "clp", QpMethod::kNnls, true, "balance clp"},
+      {Annotator::kBalance, "nlopt", QpMethod::kNnls, true, "balance nlopt"},
+  };
+  std::printf("%-22s %6s %9s %10s %10s %10s %12s\n", "annotator/backend", "blocks", "unbal%", "median_ms", "p99_ms",
+              "max_ms", "peak_heap_kB");
+  for (int n : sizes) {
+    std::vector<Stack> stacks;
+    for (int s = 0; s < piles; ++s) stacks.push_back(player_pile(n, 1000 * static_cast<uint64_t>(n) + static_cast<uint64_t>(s)));
+    for (const Config& c : configs) {
+      if (!only.empty() && c.label.find(only) == std::string::npos) continue;
+      const bool uses_nlopt = c.solver == "nlopt" || c.qp == QpMethod::kNlopt;
+      if (uses_nlopt && n > max_nlopt) {
+        std::printf("%-22s %6d   skipped (NLopt SLSQP is cubic; raise --max-nlopt-blocks)\n", c.label.c_str(), n);
+        continue;
+      }
+      PredictOptions options;
+      options.annotator = c.annotator;
+      options.solver = c.solver;
+      options.qp = c.qp;
+      options.lp_first = c.lp_first;
+      const int count = uses_nlopt ? std::min(piles, 20) : piles;
+      std::vector<double> ms;
+      int unbalanced = 0;
+      int failures = 0;
+      size_t peak = 0;
+      for (int k = 0; k < count; ++k) {
+        const size_t base = g_current.load();
+        g_peak.store(base);
+        const auto t0 = std::chrono::steady_clock::now();
+        bool is_balanced = true;
+        try {
+          is_balanced = predict(stacks[static_cast<size_t>(k)], options).balanced;
+        } catch (const std::exception& e) {
+          ++failures;
+          if (failures == 1) std::fprintf(stderr, "%s n=%d pile %d: %s\n", c.label.c_str(), n, k, e.what());
+        }
+        const auto t1 = std::chrono::steady_clock::now();
+        peak = std::max(peak, g_peak.load() - base);
+        ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+        unbalanced += is_balanced ? 0 : 1;
+      }
+      std::printf("%-22s %6d %8.0f%% %10.4f %10.4f %10.4f %12.1f%s\n", c.label.c_str(), n, 100.0 * unbalanced / count,
+                  percentile(ms, 0.5), percentile(ms, 0.99), *std::max_element(ms.begin(), ms.end()), peak / 1024.0,
+                  failures ? ("  FAILED " + std::to_string(failures)).c_str() : "");
+      std::fflush(stdout);
+    }
+  }
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  std::printf("process peak RSS: %ld kB\n", usage.ru_maxrss);
+  return 0;
+}
