@@ -1,0 +1,91 @@
+// Draws what the projector shows with SDL's 2D renderer: the game display (every block filled in
+// projector coordinates with its predicted colour; score, MAX and how close the pile is to the best
+// possible top right; the round timer top centre; a miniature of the pile with its prediction, the
+// animated collapse preview and the hint outline top left) or a calibration pattern full screen.
+// Every colour of the game display comes from palette.h: green stays 0 in every pixel.
+#pragma once
+
+#include <SDL.h>
+#include <SDL_ttf.h>
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "bricklayer/projection/board_to_projector.h"
+#include "bricklayer/projection/palette.h"
+#include "bricklayer/projection/round_clock.h"
+#include "bricklayer/projection/scene.h"
+
+namespace bricklayer::projection {
+
+inline constexpr const char* kDefaultFontPath = "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf";
+
+// The numbers the head-up display shows.
+struct Hud {
+  int score = 0;
+  int max_score = 0;
+  int64_t remaining_ms = 0;
+  RoundClock::State round_state = RoundClock::State::kIdle;
+  int num_blocks = 0;
+  double overhang = 0;                  // block lengths
+  std::optional<double> best_overhang;  // best possible for num_blocks; nothing = line not shown
+};
+
+// Where the parts of the display were drawn in the last frame (projector pixels). Text rectangles
+// are the drawn text's bounds; an empty rectangle means not drawn.
+struct Layout {
+  SDL_Rect score{};
+  SDL_Rect max{};
+  SDL_Rect best{};
+  SDL_Rect timer{};
+  SDL_Rect round_label{};
+  SDL_Rect minimap{};
+};
+
+class GameRenderer {
+ public:
+  // Throws std::runtime_error when SDL_ttf or the font cannot be loaded (names the file).
+  GameRenderer(SDL_Renderer* renderer, int width, int height, const std::string& font_path = kDefaultFontPath);
+  ~GameRenderer();
+  GameRenderer(const GameRenderer&) = delete;
+  GameRenderer& operator=(const GameRenderer&) = delete;
+
+  // anim_ms drives the collapse preview's animation (any monotonic milliseconds).
+  void draw_game(const Scene& scene, const BoardToProjector& mapping, const Hud& hud, int64_t anim_ms);
+  // A BGR (CV_8UC3) or grey (CV_8UC1) image stretched over the whole projector image.
+  void draw_pattern(const cv::Mat& image);
+  const Layout& layout() const { return layout_; }
+
+ private:
+  struct Text {
+    std::string text;
+    Rgb colour{};
+    SDL_Texture* texture = nullptr;
+    int w = 0;
+    int h = 0;
+  };
+  enum Slot { kScore, kMax, kBest, kTimer, kRoundLabel, kSlotCount };
+  // Draws text with its top edge at y; align: 0 left of x, 1 centred on x, 2 right of x.
+  SDL_Rect draw_text(Slot slot, TTF_Font* font, const std::string& text, Rgb colour, int x, int y, int align);
+  void fill_quad(const std::array<SDL_FPoint, 4>& corners, Rgb colour);
+  void outline(const SDL_FPoint* points, int count, Rgb colour);
+  void draw_blocks(const Scene& scene, const BoardToProjector& mapping);
+  void draw_hud(const Hud& hud);
+  void draw_minimap(const Scene& scene, int64_t anim_ms);
+
+  SDL_Renderer* renderer_;
+  int width_;
+  int height_;
+  TTF_Font* font_big_ = nullptr;
+  TTF_Font* font_mid_ = nullptr;
+  TTF_Font* font_small_ = nullptr;
+  std::array<Text, kSlotCount> texts_{};
+  SDL_Texture* pattern_ = nullptr;
+  Layout layout_{};
+};
+
+}  // namespace bricklayer::projection
