@@ -1,6 +1,7 @@
 #include "bricklayer/simcam/piles.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -22,26 +23,26 @@ core::Stack random_pile(uint64_t seed, const PileOptions& o) {
   core::Stack stack;
   int remaining = o.blocks;
   int row = 0;
-  double lo = o.min_x, hi = o.max_x;  // where this row's blocks may start
+  double lo = o.min_x, hi = o.max_x;  // where this row's left ends may lie
+  // Rows shrink upwards like a player's pile: the bottom row takes about sqrt(2n) blocks.
+  int target = std::clamp(static_cast<int>(std::ceil(std::sqrt(2.0 * o.blocks))), 1, o.max_per_row);
   while (remaining > 0) {
-    // Place left to right from a random start, with random gaps, until the row is full.
-    double x = uniform(s, lo, std::min(hi, lo + 1.5));
-    double row_left = x, row_right = x;
+    double x = uniform(s, lo, std::min(hi, lo + 0.6));
+    double row_left = x, row_right = x + 1.0;
     int in_row = 0;
-    while (remaining > 0 && in_row < o.max_per_row && x <= hi) {
+    while (remaining > 0 && in_row < target && x <= hi) {
       stack.blocks.push_back({static_cast<int64_t>(stack.blocks.size() + 1), row, x});
       row_right = x + 1.0;
       --remaining;
       ++in_row;
       x += 1.0 + uniform(s, o.min_gap, o.max_gap);
-      // Thin rows out as the pile grows, so piles look like piles rather than walls.
-      if (in_row >= 2 && uniform(s, 0, 1) < 0.12 * row) break;
     }
     ++row;
+    if (uniform(s, 0, 1) < 0.6) target = std::max(1, target - 1);
     // The next row sits over this one, overhanging a little on either side.
-    lo = std::max(o.min_x, row_left - 0.4);
-    hi = std::min(o.max_x, row_right - 0.6);
-    if (hi < lo) { lo = o.min_x; hi = o.max_x; }
+    lo = std::max(o.min_x, row_left - 0.3);
+    hi = std::min(o.max_x, row_right - 0.7);
+    if (hi < lo) { lo = o.min_x; hi = o.max_x; target = std::clamp(remaining, 1, o.max_per_row); }
   }
   return stack;
 }

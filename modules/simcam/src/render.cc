@@ -514,50 +514,64 @@ Rendered Renderer::render(const core::Stack& stack, const Nuisance& n, const cv:
 
   // Compose: vignette * (reflectance * ambient light + projector light attenuated by dark lines).
   m.frame.create(size, CV_32FC3);
-  const cv::Matx33f mix = m.projector.mixing;
-  const cv::Vec3f black = m.projector.ambient;
+  float mix[9];
+  for (int i = 0; i < 9; ++i) mix[i] = static_cast<float>(m.projector.mixing.val[i]);
+  const float black[3] = {static_cast<float>(m.projector.ambient[0]), static_cast<float>(m.projector.ambient[1]),
+                          static_cast<float>(m.projector.ambient[2])};
   const float absorb = static_cast<float>(m.projector.line_absorption);
-  const cv::Vec3f amb = kAmbientColour * static_cast<float>(m.camera.board_brightness);
+  const float amb[3] = {kAmbientColour[0] * static_cast<float>(m.camera.board_brightness),
+                        kAmbientColour[1] * static_cast<float>(m.camera.board_brightness),
+                        kAmbientColour[2] * static_cast<float>(m.camera.board_brightness)};
   for (int v = 0; v < size.height; ++v) {
-    const cv::Vec3f* refl = m.camera_refl.ptr<cv::Vec3f>(v);
+    const float* refl = m.camera_refl.ptr<float>(v);
     const float* a = m.ambient.ptr<float>(v);
     const float* vig = m.light.ptr<float>(v);
-    const cv::Vec3b* pl = projecting ? m.proj_light.ptr<cv::Vec3b>(v) : nullptr;
-    const float* cover = m.proj_cover.ptr<float>(v);
-    cv::Vec3f* out = m.frame.ptr<cv::Vec3f>(v);
-    for (int u = 0; u < size.width; ++u) {
-      const cv::Vec3f& r = refl[u];
-      cv::Vec3f c(r[0] * amb[0] * a[u], r[1] * amb[1] * a[u], r[2] * amb[2] * a[u]);
-      if (projecting) {
-        cv::Vec3f p(pl[u][0], pl[u][1], pl[u][2]);
-        cv::Vec3f added = mix * p + black * cover[u];
-        for (int ch = 0; ch < 3; ++ch) c[ch] += added[ch] * (1.0f - absorb * (1.0f - r[ch]));
+    float* out = m.frame.ptr<float>(v);
+    if (!projecting) {
+      for (int u = 0; u < size.width; ++u) {
+        const float s = a[u] * vig[u];
+        out[3 * u] = refl[3 * u] * amb[0] * s;
+        out[3 * u + 1] = refl[3 * u + 1] * amb[1] * s;
+        out[3 * u + 2] = refl[3 * u + 2] * amb[2] * s;
       }
-      out[u] = c * vig[u];
+      continue;
+    }
+    const uchar* pl = m.proj_light.ptr<uchar>(v);
+    const float* cover = m.proj_cover.ptr<float>(v);
+    for (int u = 0; u < size.width; ++u) {
+      const float pb = pl[3 * u], pg = pl[3 * u + 1], pr = pl[3 * u + 2];
+      for (int ch = 0; ch < 3; ++ch) {
+        const float r = refl[3 * u + ch];
+        const float added = mix[3 * ch] * pb + mix[3 * ch + 1] * pg + mix[3 * ch + 2] * pr + black[ch] * cover[u];
+        out[3 * u + ch] = (r * amb[ch] * a[u] + added * (1.0f - absorb * (1.0f - r))) * vig[u];
+      }
     }
   }
 
   if (n.blur_sigma > 0) cv::GaussianBlur(m.frame, m.frame, cv::Size(0, 0), n.blur_sigma, n.blur_sigma, cv::BORDER_REPLICATE);
 
   Rendered result;
-  result.bgr.create(size, CV_8UC3);
   const bool noisy = n.noise > 0 || n.read_noise > 0;
-  const std::vector<float>& table = normal_table();
-  uint64_t state = seed * 0x2545F4914F6CDD1DULL + 0x6A09E667F3BCC909ULL;
-  const float shot = static_cast<float>(n.noise * n.noise / 255.0), read = static_cast<float>(n.read_noise * n.read_noise);
-  for (int v = 0; v < size.height; ++v) {
-    const cv::Vec3f* in = m.frame.ptr<cv::Vec3f>(v);
-    cv::Vec3b* out = result.bgr.ptr<cv::Vec3b>(v);
-    for (int u = 0; u < size.width; ++u) {
-      cv::Vec3f c = in[u];
-      if (noisy) {
-        uint64_t bits = splitmix64(state);
+  if (!noisy) {
+    m.frame.convertTo(result.bgr, CV_8UC3);
+  } else {
+    result.bgr.create(size, CV_8UC3);
+    // Noise std-dev per brightness level (brightness-dependent shot noise plus read noise), a table lookup.
+    float sigma_of[257];
+    for (int i = 0; i <= 256; ++i) sigma_of[i] = static_cast<float>(std::sqrt(n.read_noise * n.read_noise + n.noise * n.noise * i / 255.0));
+    const std::vector<float>& table = normal_table();
+    uint64_t state = seed * 0x2545F4914F6CDD1DULL + 0x6A09E667F3BCC909ULL;
+    for (int v = 0; v < size.height; ++v) {
+      const float* in = m.frame.ptr<float>(v);
+      uchar* out = result.bgr.ptr<uchar>(v);
+      for (int u = 0; u < size.width; ++u) {
+        const uint64_t bits = splitmix64(state);
         for (int ch = 0; ch < 3; ++ch) {
-          float sigma = std::sqrt(read + shot * std::max(0.0f, c[ch]));
-          c[ch] += sigma * table[(bits >> (16 * ch)) & 0xFFFF];
+          const float c = in[3 * u + ch];
+          const int level = static_cast<int>(std::clamp(c, 0.0f, 256.0f));
+          out[3 * u + ch] = cv::saturate_cast<uchar>(c + sigma_of[level] * table[(bits >> (16 * ch)) & 0xFFFF]);
         }
       }
-      out[u] = cv::Vec3b(cv::saturate_cast<uchar>(c[0]), cv::saturate_cast<uchar>(c[1]), cv::saturate_cast<uchar>(c[2]));
     }
   }
   if (n.jpeg_quality > 0) {
