@@ -1,0 +1,186 @@
+// Calibration against simcam: random camera/projector setups (homography, lens distortion, colour
+// mixing) rendered with noise; the recovered camera -> projector mapping and colour mixing are
+// compared with the setup's truth. Plus the drift self-check and the rejection paths.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+
+#include "bricklayer/calibration/calibrator.h"
+#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/calibration/mapping.h"
+#include "bricklayer/calibration/patterns.h"
+#include "bricklayer/simcam/render.h"
+
+namespace cal = bricklayer::calibration;
+namespace sim = bricklayer::simcam;
+
+namespace {
+
+// The frames calibrate would collect: every step's pattern rendered through the setup.
+std::vector<cv::Mat> capture(const sim::Renderer& renderer, const std::vector<cal::CalibrationStep>& steps,
+                             const sim::Nuisance& nuisance, uint64_t seed) {
+  std::vector<cv::Mat> frames;
+  const bricklayer::core::Stack empty;
+  for (size_t i = 0; i < steps.size(); ++i) {
+    const cv::Mat shown = cal::render_pattern(steps[i].command, renderer.projector().size);
+    frames.push_back(renderer.render(empty, nuisance, &shown, seed * 100 + i).bgr);
+  }
+  return frames;
+}
+
+struct MappingError {
+  double mean = 0;
+  double max = 0;
+  int points = 0;
+};
+
+// Camera pixel -> projector pixel, calibration vs truth, over a grid covering the board (the
+// rectified frame 0..640 x 0..480 as the camera sees it).
+MappingError mapping_error(const bricklayer::calibration_t& c, const sim::CameraSetup& camera,
+                           const sim::ProjectorSetup& projector) {
+  MappingError e;
+  double sum = 0;
+  for (double y = 10; y <= 470; y += 20) {
+    for (double x = 10; x <= 630; x += 20) {
+      const cv::Point2d cam = sim::rectified_to_camera(camera, {x, y});
+      if (cam.x < 2 || cam.y < 2 || cam.x > camera.size.width - 3 || cam.y > camera.size.height - 3) continue;
+      const cv::Point2d truth = sim::camera_to_projector(camera, projector, cam);
+      const double d = cv::norm(cal::camera_to_projector(c, cam) - truth);
+      sum += d;
+      e.max = std::max(e.max, d);
+      ++e.points;
+    }
+  }
+  e.mean = e.points ? sum / e.points : 1e9;
+  return e;
+}
+
+sim::Nuisance calibration_nuisance() {
+  sim::Nuisance n = sim::Nuisance::level(1);  // mild: gradient, vignetting, a player's shadow, blur, noise, JPEG 95
+  n.layout_seed = 7;
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("Twenty random setups: mapping within 0.5 px mean / 1.5 px max, colour mixing within 5%") {
+  cal::CalibrationOptions options;
+  const auto steps = cal::calibration_steps(options);
+  double worst_mean = 0, worst_max = 0, worst_colour = 0;
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    const sim::CameraSetup camera = sim::CameraSetup::random(seed);
+    const sim::ProjectorSetup projector = sim::ProjectorSetup::random(seed);
+    const sim::Renderer renderer(camera, projector);
+    const auto frames = capture(renderer, steps, calibration_nuisance(), seed);
+    const cal::CalibrationResult result = cal::compute_calibration(frames, options, 1000);
+    INFO("seed " << seed << ": " << result.message);
+    REQUIRE(result.status == cal::CalibrationStatus::kOk);
+    REQUIRE_NOTHROW(cal::validate_calibration(result.calibration));
+
+    const MappingError e = mapping_error(result.calibration, camera, projector);
+    INFO("mapping error mean " << e.mean << " max " << e.max << " over " << e.points << " grid points");
+    CHECK(e.points > 500);
+    CHECK(e.mean < 0.5);
+    CHECK(e.max < 1.5);
+    worst_mean = std::max(worst_mean, e.mean);
+    worst_max = std::max(worst_max, e.max);
+
+    // Colour: every entry within 5% of the largest (the diagonal), and the diagonal within 5% of itself.
+    const cv::Matx33d m = cal::colour_mixing(result.calibration);
+    const double scale = std::max({projector.mixing(0, 0), projector.mixing(1, 1), projector.mixing(2, 2)});
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        const double err = std::abs(m(i, j) - projector.mixing(i, j));
+        INFO("mixing(" << i << "," << j << ") = " << m(i, j) << ", truth " << projector.mixing(i, j));
+        CHECK(err < 0.05 * scale);
+        if (i == j) CHECK(err < 0.05 * projector.mixing(i, i));
+        worst_colour = std::max(worst_colour, err / scale);
+      }
+    }
+  }
+  std::cout << "calibration over 20 random setups: worst mean " << worst_mean << " px, worst max " << worst_max
+            << " px, worst colour error " << 100 * worst_colour << "% of full scale\n";
+}
+
+TEST_CASE("Self-check catches a moved camera and passes an unmoved one") {
+  cal::CalibrationOptions options;
+  const uint64_t seed = 5;
+  const sim::CameraSetup camera = sim::CameraSetup::random(seed);
+  const sim::ProjectorSetup projector = sim::ProjectorSetup::random(seed);
+  const sim::Renderer renderer(camera, projector);
+  const auto result = cal::compute_calibration(capture(renderer, cal::calibration_steps(options), calibration_nuisance(), seed), options, 1);
+  REQUIRE(result.status == cal::CalibrationStatus::kOk);
+
+  const cv::Mat check = cal::render_pattern(cal::self_check_command(), projector.size);
+  const bricklayer::core::Stack empty;
+  const auto unmoved = cal::self_check(result.calibration, renderer.render(empty, calibration_nuisance(), &check, 99).bgr);
+  INFO(unmoved.message);
+  REQUIRE(unmoved.measured);
+  CHECK(unmoved.markers_found == 5);
+  CHECK(unmoved.drift_mean_px < 0.5);
+  CHECK(unmoved.drift_max_px < 1.5);
+
+  // Knock the camera: 4 px right, 2 px down and 0.5 degrees of rotation.
+  sim::CameraSetup moved = camera;
+  const double a = 0.5 * M_PI / 180;
+  const cv::Matx33d knock(std::cos(a), -std::sin(a), 4, std::sin(a), std::cos(a), 2, 0, 0, 1);
+  moved.rectified_to_camera = knock * camera.rectified_to_camera;
+  const sim::Renderer moved_renderer(moved, projector);
+  const auto drifted = cal::self_check(result.calibration, moved_renderer.render(empty, calibration_nuisance(), &check, 99).bgr);
+  INFO(drifted.message);
+  REQUIRE(drifted.measured);
+  CHECK(drifted.drift_mean_px > 3.0);
+
+  // Nothing projected: not measured, with a message saying why.
+  const auto dark = cal::self_check(result.calibration, renderer.render(empty, calibration_nuisance(), nullptr, 99).bgr);
+  CHECK_FALSE(dark.measured);
+  CHECK(dark.message.find("no self-check marker") != std::string::npos);
+}
+
+TEST_CASE("Calibrations that cannot be trusted are rejected with a clear message") {
+  cal::CalibrationOptions options;
+  const uint64_t seed = 3;
+  const sim::CameraSetup camera = sim::CameraSetup::random(seed);
+  const sim::ProjectorSetup projector = sim::ProjectorSetup::random(seed);
+  const sim::Renderer renderer(camera, projector);
+  const auto steps = cal::calibration_steps(options);
+
+  SECTION("reprojection error above --max-error-px") {
+    // A blurred, noisy camera: corners still found, but less precisely than a strict threshold allows.
+    sim::Nuisance bad = sim::Nuisance::level(3);
+    bad.blur_sigma = 1.5;
+    bad.noise = 8;
+    cal::CalibrationOptions strict = options;
+    strict.max_error_px = 0.05;
+    const auto result = cal::compute_calibration(capture(renderer, steps, bad, seed), strict, 1);
+    INFO(result.message);
+    CHECK(result.status == cal::CalibrationStatus::kErrorTooHigh);
+    CHECK(result.message.find("exceeds --max-error-px") != std::string::npos);
+  }
+  SECTION("projector off: no markers") {
+    std::vector<cv::Mat> frames;
+    for (size_t i = 0; i < steps.size(); ++i) frames.push_back(renderer.render({}, calibration_nuisance(), nullptr, i).bgr);
+    const auto result = cal::compute_calibration(frames, options, 1);
+    INFO(result.message);
+    CHECK(result.status == cal::CalibrationStatus::kTooFewPoints);
+    CHECK(result.message.find("markers detected") != std::string::npos);
+  }
+  SECTION("wrong number of frames, empty frames") {
+    auto frames = capture(renderer, steps, calibration_nuisance(), seed);
+    frames.pop_back();
+    CHECK(cal::compute_calibration(frames, options, 1).status == cal::CalibrationStatus::kBadFrames);
+    frames.push_back(cv::Mat());
+    const auto result = cal::compute_calibration(frames, options, 1);
+    CHECK(result.status == cal::CalibrationStatus::kBadFrames);
+    CHECK(result.message.find("step 6") != std::string::npos);
+  }
+  SECTION("saturated camera") {
+    cal::CalibrationOptions bright = options;
+    bright.colour_drive = 255;
+    const auto result = cal::compute_calibration(capture(renderer, cal::calibration_steps(bright), calibration_nuisance(), seed), bright, 1);
+    INFO(result.message);
+    CHECK(result.status == cal::CalibrationStatus::kSaturated);
+  }
+}
