@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "bricklayer/calibration/mapping.h"
+#include "bricklayer/common/board.h"
 
 namespace bricklayer::calibration {
 namespace {
@@ -160,6 +161,28 @@ void get_array(const json& j, const char* key, double* out, size_t count) {
 }  // namespace
 
 void validate_calibration(const bricklayer::calibration_t& cal) { check_all(cal); }
+
+bricklayer::calibration_t default_calibration() {
+  bricklayer::calibration_t cal{};
+  cal.utime = 0;
+  cal.camera_width = kDefaultCameraWidth;
+  cal.camera_height = kDefaultCameraHeight;
+  cal.projector_width = kDefaultProjectorWidth;
+  cal.projector_height = kDefaultProjectorHeight;
+  cal.camera_matrix[0] = 0.875 * kDefaultCameraWidth;
+  cal.camera_matrix[1] = 0.875 * kDefaultCameraWidth;
+  cal.camera_matrix[2] = (kDefaultCameraWidth - 1) / 2.0;
+  cal.camera_matrix[3] = (kDefaultCameraHeight - 1) / 2.0;
+  for (int i = 0; i < 9; ++i) cal.camera_to_projector[i] = kDefaultCameraToProjector[i];
+  const BoardGeometry board;
+  const auto to_board = board.camera_to_board();
+  for (int i = 0; i < 9; ++i) cal.camera_to_board[i] = to_board[i];
+  const double mixing[9] = {0.55, 0.10, 0.02, 0.12, 0.60, 0.14, 0.02, 0.08, 0.58};
+  for (int i = 0; i < 9; ++i) cal.colour_mixing[i] = mixing[i];
+  for (int i = 0; i < 3; ++i) cal.ambient_bgr[i] = 4.0;
+  cal.block_height = board.block_height_px / board.block_length_px;
+  return cal;
+}
 
 bricklayer::calibration_t parse_calibration_json(const std::string& text) {
   if (text.size() > kMaxFileBytes) fail("file larger than 1 MB (" + std::to_string(text.size()) + " bytes); not a calibration file");

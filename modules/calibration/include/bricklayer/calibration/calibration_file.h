@@ -30,6 +30,11 @@ class CalibrationFileError : public std::runtime_error {
 // (0, 10], negative or inconsistent reprojection errors.
 void validate_calibration(const bricklayer::calibration_t& cal);
 
+// The uncalibrated default (common/board.h): a 640x480 camera with no lens distortion looking
+// straight at the board, kDefaultCameraToProjector, the default BoardGeometry, and a typical colour
+// mixing (diagonal 0.55..0.6, red and blue leaking ~0.1 into green). Valid; utime 0.
+bricklayer::calibration_t default_calibration();
+
 // JSON text <-> calibration_t. parse throws CalibrationFileError ("calibration: <what>: <why>") for
 // text that is not JSON, more than 1 MB, a missing or unknown key, a wrong type or count, or any
 // problem validate_calibration() finds.
