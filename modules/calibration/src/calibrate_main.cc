@@ -1,0 +1,433 @@
+// bricklayer-calibrate: automatic camera-to-projector registration, colour mixing and drift check.
+//
+// Subscribes: BL_PROJECTOR (projector_state_t: which command the projector shows now),
+//             BL_IMAGE (image_t: camera frames), BL_STACK (stack_t: is the board empty, --serve),
+//             BL_COMMAND (command_t SELF_CHECK, --serve).
+// Publishes:  BL_COMMAND (command_t SHOW_PATTERN / CLEAR_PATTERN, each with a fresh sequence number),
+//             BL_CALIBRATION (calibration_t), BL_HEARTBEAT (status "step k of n: ...", value drift_px).
+//
+// Modes:
+//   (default)     show every calibration pattern, compute, reject (exit 1) or save --output and
+//                 publish on BL_CALIBRATION (exit 0).
+//   --self-check  load --output, project the self-check markers once, report the drift (exit 0, or
+//                 3 when it exceeds --drift-threshold).
+//   --serve       load --output, publish it (again every --republish seconds, so late starters catch
+//                 up), and run the self-check on every SELF_CHECK command while the board is empty.
+// For every pattern: send SHOW_PATTERN, wait for projector_state_t echoing its sequence, then use the
+// camera frame received --skip-frames frames after the echo (frames already in flight show the
+// previous pattern). A step without echo or frame within --timeout seconds is sent once more, then
+// the run fails with a message naming what is missing.
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/calibration/calibrator.h"
+#include "bricklayer/calibration/patterns.h"
+#include "bricklayer/calibration_t.hpp"
+#include "bricklayer/command_t.hpp"
+#include "bricklayer/common/board.h"
+#include "bricklayer/common/channels.h"
+#include "bricklayer/common/flags.h"
+#include "bricklayer/common/lcm_url.h"
+#include "bricklayer/common/log.h"
+#include "bricklayer/common/module.h"
+#include "bricklayer/image_t.hpp"
+#include "bricklayer/projector_state_t.hpp"
+#include "bricklayer/stack_t.hpp"
+
+namespace bricklayer {
+namespace {
+
+namespace cal = calibration;
+
+constexpr int kExitRejected = 1;
+constexpr int kExitDrift = 3;
+
+// A camera frame as BGR, or empty when it cannot be decoded (counted as an error by the caller).
+cv::Mat decode_frame(const image_t& img) {
+  if (img.size != static_cast<int32_t>(img.data.size()) || img.width <= 0 || img.height <= 0 ||
+      img.width > 8192 || img.height > 8192) {
+    return {};
+  }
+  cv::Mat out;
+  const int64_t pixels = static_cast<int64_t>(img.width) * img.height;
+  switch (img.format) {
+    case image_t::FORMAT_JPEG:
+    case image_t::FORMAT_PNG:
+      try {
+        out = cv::imdecode(img.data, cv::IMREAD_COLOR);
+      } catch (const cv::Exception&) {
+        return {};
+      }
+      break;
+    case image_t::FORMAT_GRAY8:
+      if (static_cast<int64_t>(img.data.size()) != pixels) return {};
+      cv::cvtColor(cv::Mat(img.height, img.width, CV_8UC1, const_cast<uint8_t*>(img.data.data())), out, cv::COLOR_GRAY2BGR);
+      break;
+    case image_t::FORMAT_BGR8:
+      if (static_cast<int64_t>(img.data.size()) != 3 * pixels) return {};
+      out = cv::Mat(img.height, img.width, CV_8UC3, const_cast<uint8_t*>(img.data.data())).clone();
+      break;
+    default:
+      return {};
+  }
+  if (out.empty() || out.cols != img.width || out.rows != img.height || out.type() != CV_8UC3) return {};
+  return out;
+}
+
+cv::Size parse_size(const std::string& text) {
+  int w = 0, h = 0;
+  char x = 0;
+  std::istringstream in(text);
+  if (!(in >> w >> x >> h) || (x != 'x' && x != 'X') || w < 16 || h < 16 || w > 16384 || h > 16384) {
+    throw FlagError("--projector-size: expected WIDTHxHEIGHT like 1024x768, got \"" + text + "\"");
+  }
+  return {w, h};
+}
+
+struct Options {
+  std::string lcm_url;
+  std::string output;
+  cal::CalibrationOptions calibration;
+  double timeout_s = 5.0;
+  int skip_frames = 3;
+  double drift_threshold_px = 2.0;
+  double republish_s = 5.0;
+};
+
+// Shows a list of patterns one at a time and collects one camera frame per pattern.
+class PatternCapture {
+ public:
+  PatternCapture(Module& module, std::vector<cal::CalibrationStep> steps, const Options& options)
+      : module_(module), steps_(std::move(steps)), options_(options) {}
+
+  bool done() const { return next_ >= steps_.size() && !waiting_; }
+  bool failed() const { return !failure_.empty(); }
+  const std::string& failure() const { return failure_; }
+  std::vector<cv::Mat> take_frames() { return std::move(frames_); }
+
+  void on_projector_state(const projector_state_t& s) {
+    if (waiting_ && !echoed_ && s.command_sequence == sequence_) {
+      echoed_ = true;
+      frames_seen_ = 0;
+      log::debug("projector shows sequence ", sequence_);
+    }
+  }
+
+  void on_frame(const image_t& img) {
+    if (!waiting_ || !echoed_) return;
+    if (++frames_seen_ <= options_.skip_frames) return;
+    cv::Mat bgr = decode_frame(img);
+    if (bgr.empty()) {
+      ++module_.counters().errors;
+      log::warn("camera frame ", img.frame_number, " could not be decoded (format ", img.format, ", ", img.width, "x",
+                img.height, "); waiting for the next");
+      return;
+    }
+    if (!frames_.empty() && bgr.size() != frames_.front().size()) {
+      ++module_.counters().errors;
+      log::warn("camera frame size changed during calibration; ignoring the frame");
+      return;
+    }
+    frames_.push_back(std::move(bgr));
+    waiting_ = false;
+    ++next_;
+  }
+
+  // Sends the next command when idle, retries or fails on timeout. now_s: monotonic seconds.
+  void tick(double now_s) {
+    if (failed() || done()) return;
+    if (!waiting_) {
+      send(now_s);
+      return;
+    }
+    if (now_s - sent_at_s_ < options_.timeout_s) return;
+    if (!retried_) {
+      log::warn("step ", next_ + 1, ": ", echoed_ ? "no camera frame on BL_IMAGE" : "no projector echo on BL_PROJECTOR",
+                " within ", options_.timeout_s, " s; showing the pattern again");
+      retried_ = true;
+      send(now_s);
+      return;
+    }
+    failure_ = echoed_ ? "no camera frames on " + channel(kImageChannel) + " for " + std::to_string(2 * options_.timeout_s) +
+                             " s after the projector showed step " + std::to_string(next_ + 1) + ": is the camera (bricklayer-camera or bricklayer-simcam) running?"
+                       : "the projector did not confirm step " + std::to_string(next_ + 1) + " (no projector_state_t with sequence " +
+                             std::to_string(sequence_) + " on " + channel(kProjectorChannel) + " within " +
+                             std::to_string(2 * options_.timeout_s) + " s): is bricklayer-projection running?";
+  }
+
+  size_t step() const { return next_; }
+  size_t steps() const { return steps_.size(); }
+
+ private:
+  void send(double now_s) {
+    command_t cmd = steps_[next_].command;
+    cmd.utime = wall_utime();
+    cmd.sequence = sequence_ = next_sequence();
+    cmd.argument = "bricklayer-calibrate";
+    if (!retried_ || !waiting_) {
+      log::info("step ", next_ + 1, " of ", steps_.size(), ": ", steps_[next_].description);
+    }
+    std::ostringstream status;
+    status << "step " << next_ + 1 << " of " << steps_.size() << ": " << steps_[next_].description;
+    module_.set_status(status.str());
+    if (!waiting_) retried_ = false;
+    waiting_ = true;
+    echoed_ = false;
+    frames_seen_ = 0;
+    sent_at_s_ = now_s;
+    module_.publish(channel(kCommandChannel), cmd);
+  }
+
+  // Unique across runs and other senders: microseconds at start, then counting.
+  int64_t next_sequence() {
+    if (last_sequence_ == 0) last_sequence_ = wall_utime();
+    return ++last_sequence_;
+  }
+
+  Module& module_;
+  std::vector<cal::CalibrationStep> steps_;
+  const Options& options_;
+  std::vector<cv::Mat> frames_;
+  size_t next_ = 0;
+  bool waiting_ = false;
+  bool echoed_ = false;
+  bool retried_ = false;
+  int frames_seen_ = 0;
+  int64_t sequence_ = 0;
+  int64_t last_sequence_ = 0;
+  double sent_at_s_ = 0;
+  std::string failure_;
+};
+
+double monotonic_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+class Calibrate {
+ public:
+  enum class Mode { kCalibrate, kSelfCheck, kServe };
+
+  Calibrate(const Options& options, Mode mode) : options_(options), mode_(mode), module_("calibrate", options.lcm_url) {
+    if (mode_ != Mode::kCalibrate) {
+      calibration_ = cal::load_calibration(options_.output);
+      log::info("loaded ", options_.output, " (reprojection error mean ", calibration_->reprojection_error_mean_px, " px)");
+    }
+    module_.subscribe<projector_state_t>(channel(kProjectorChannel), [this](const projector_state_t& s) { HandleProjector(s); });
+    module_.subscribe<image_t>(channel(kImageChannel), [this](const image_t& m) { HandleImage(m); });
+    module_.subscribe<command_t>(channel(kCommandChannel), [this](const command_t& c) { HandleCommand(c); });
+    module_.subscribe<stack_t>(channel(kStackChannel), [this](const stack_t& s) { HandleStack(s); });
+    if (mode_ == Mode::kCalibrate) {
+      capture_ = std::make_unique<PatternCapture>(module_, cal::calibration_steps(options_.calibration), options_);
+    } else if (mode_ == Mode::kSelfCheck) {
+      start_self_check();
+    }
+  }
+
+  int Run() {
+    Module::install_signal_handlers();
+    const int code = module_.run([this] { Tick(); });
+    if (code != 0) return code;
+    return exit_code_;
+  }
+
+ private:
+  void HandleProjector(const projector_state_t& s) {
+    if (capture_) capture_->on_projector_state(s);
+  }
+  void HandleImage(const image_t& m) {
+    if (capture_) capture_->on_frame(m);
+  }
+  void HandleStack(const stack_t& s) {
+    board_empty_ = s.status == stack_t::STATUS_OK && s.num_blocks == 0;
+  }
+  void HandleCommand(const command_t& c) {
+    if (c.command != command_t::SELF_CHECK || mode_ != Mode::kServe) return;
+    if (capture_) {
+      log::warn("SELF_CHECK ignored: a self-check is already running");
+      return;
+    }
+    if (!board_empty_) {
+      log::warn("SELF_CHECK postponed: the board is not empty (or no empty-board stack_t seen yet); clear the board and ask again");
+      module_.set_status("self-check needs an empty board");
+      return;
+    }
+    start_self_check();
+  }
+
+  void start_self_check() {
+    log::info("self-check: projecting ", cal::kMarkerSetSelfCheck == 2 ? "five" : "the", " check markers");
+    capture_ = std::make_unique<PatternCapture>(
+        module_, std::vector<cal::CalibrationStep>{{cal::self_check_command(), "self-check markers"}}, options_);
+  }
+
+  void clear_pattern() {
+    command_t cmd{};
+    cmd.utime = wall_utime();
+    cmd.command = command_t::CLEAR_PATTERN;
+    cmd.sequence = -1;
+    cmd.argument = "bricklayer-calibrate";
+    module_.publish(channel(kCommandChannel), cmd);
+  }
+
+  void publish_calibration() {
+    if (!calibration_) return;
+    module_.publish(channel(kCalibrationChannel), *calibration_);
+    last_publish_s_ = monotonic_s();
+  }
+
+  void Tick() {
+    const double now = monotonic_s();
+    if (mode_ == Mode::kServe && calibration_ && now - last_publish_s_ >= options_.republish_s) publish_calibration();
+    if (!capture_) return;
+    capture_->tick(now);
+    if (capture_->failed()) {
+      log::error(capture_->failure());
+      module_.set_status(capture_->failure());
+      clear_pattern();
+      capture_.reset();
+      if (mode_ != Mode::kServe) finish(kExitRejected);
+      return;
+    }
+    if (!capture_->done()) return;
+    std::vector<cv::Mat> frames = capture_->take_frames();
+    capture_.reset();
+    clear_pattern();
+    if (mode_ == Mode::kCalibrate) {
+      finish_calibration(frames);
+    } else {
+      finish_self_check(frames.front());
+    }
+  }
+
+  void finish_calibration(const std::vector<cv::Mat>& frames) {
+    module_.set_status("computing");
+    log::info("computing the calibration from ", frames.size(), " frames");
+    const cal::CalibrationResult result = cal::compute_calibration(frames, options_.calibration, wall_utime());
+    if (result.status != cal::CalibrationStatus::kOk) {
+      log::error(result.message);
+      module_.set_status(std::string("calibration rejected: ") + cal::to_string(result.status));
+      finish(kExitRejected);
+      return;
+    }
+    log::info(result.message);
+    try {
+      cal::save_calibration(options_.output, result.calibration);
+    } catch (const std::exception& e) {
+      log::error(e.what());
+      finish(kExitRejected);
+      return;
+    }
+    log::info("saved ", options_.output, "; publishing on ", channel(kCalibrationChannel));
+    calibration_ = result.calibration;
+    publish_calibration();
+    module_.set_value("reprojection_error_mean_px", result.calibration.reprojection_error_mean_px);
+    module_.set_value("reprojection_error_max_px", result.calibration.reprojection_error_max_px);
+    module_.set_status("ok");
+    finish(0);
+  }
+
+  void finish_self_check(const cv::Mat& frame) {
+    if (frame.cols != calibration_->camera_width || frame.rows != calibration_->camera_height) {
+      log::warn("self-check: camera frames are ", frame.cols, "x", frame.rows, " but the calibration is for ",
+                calibration_->camera_width, "x", calibration_->camera_height, ": recalibrate");
+    }
+    const cal::SelfCheckResult r = cal::self_check(*calibration_, frame);
+    int code = 0;
+    if (!r.measured) {
+      log::warn(r.message);
+      module_.set_status("self-check: no markers seen");
+      code = kExitRejected;
+    } else {
+      module_.set_value("drift_px", r.drift_mean_px);
+      module_.set_value("drift_max_px", r.drift_max_px);
+      if (r.drift_mean_px > options_.drift_threshold_px) {
+        log::warn(r.message, ": above --drift-threshold ", options_.drift_threshold_px,
+                  " px; the camera or projector has moved: run bricklayer-calibrate");
+        module_.set_status("drift above threshold: recalibrate");
+        code = kExitDrift;
+      } else {
+        log::info(r.message, ": ok");
+        module_.set_status("ok");
+      }
+    }
+    if (mode_ == Mode::kSelfCheck) finish(code);
+  }
+
+  void finish(int code) {
+    exit_code_ = code;
+    module_.publish_heartbeat();  // the final status reaches the operator before exit
+    Module::request_stop();
+  }
+
+  Options options_;
+  Mode mode_;
+  Module module_;
+  std::unique_ptr<PatternCapture> capture_;
+  std::optional<calibration_t> calibration_;
+  bool board_empty_ = false;
+  double last_publish_s_ = -1e9;
+  int exit_code_ = 0;
+};
+
+int Main(int argc, char** argv) {
+  Flags flags("bricklayer-calibrate",
+              "Registers camera and projector automatically (patterns via bricklayer-projection, frames from the camera), "
+              "measures the colour mixing, saves and publishes the calibration; or checks it for drift.");
+  flags.add("lcm-url", "", "LCM URL (default: $LCM_DEFAULT_URL, else host-only udpm ttl=0)");
+  flags.add("log-level", "info", "debug, info, warn or error");
+  flags.add("output", "calibration.json", "calibration file to write (or to read with --self-check / --serve)");
+  flags.add("board", "", "BoardGeometry JSON in rectified pixels (default: the built-in default board)");
+  flags.add("projector-size", "1024x768", "projector resolution, WIDTHxHEIGHT (as bricklayer-projection --width/--height)");
+  flags.add("max-error-px", "1.0", "reject a calibration whose mean reprojection error exceeds this, projector pixels");
+  flags.add("timeout", "5", "seconds to wait for the projector's echo or a camera frame before retrying a step once");
+  flags.add("skip-frames", "3", "camera frames to discard after the projector confirms a pattern");
+  flags.add("colour-drive", "80", "projector level 1..255 for the red, green and blue frames (lower if the camera saturates)");
+  flags.add("drift-threshold", "2.0", "self-check: warn above this mean drift, projector pixels");
+  flags.add("republish", "5", "--serve: seconds between re-publications of the calibration");
+  flags.add_bool("self-check", "check the saved calibration for drift once and exit (3 = drift above threshold)");
+  flags.add_bool("serve", "publish the saved calibration and self-check on command SELF_CHECK when the board is empty");
+  if (!flags.parse(argc, argv)) return 0;
+  log::set_module("calibrate");
+  log::set_level(log::parse_level(flags.get("log-level")));
+
+  Options options;
+  options.lcm_url = resolve_lcm_url(flags.get("lcm-url"));
+  check_lcm_url(options.lcm_url);
+  options.output = flags.get("output");
+  if (options.output.empty()) throw FlagError("--output must name a file");
+  if (!flags.get("board").empty()) options.calibration.board = load_board_geometry(flags.get("board"));
+  options.calibration.projector_size = parse_size(flags.get("projector-size"));
+  options.calibration.max_error_px = flags.get_double("max-error-px");
+  if (options.calibration.max_error_px <= 0) throw FlagError("--max-error-px must be positive");
+  options.timeout_s = flags.get_double("timeout");
+  if (options.timeout_s <= 0 || options.timeout_s > 3600) throw FlagError("--timeout must be in (0, 3600] seconds");
+  options.skip_frames = static_cast<int>(flags.get_int("skip-frames"));
+  if (options.skip_frames < 0 || options.skip_frames > 100) throw FlagError("--skip-frames must be 0..100");
+  options.calibration.colour_drive = static_cast<int>(flags.get_int("colour-drive"));
+  if (options.calibration.colour_drive < 1 || options.calibration.colour_drive > 255) throw FlagError("--colour-drive must be 1..255");
+  options.drift_threshold_px = flags.get_double("drift-threshold");
+  if (options.drift_threshold_px <= 0) throw FlagError("--drift-threshold must be positive");
+  options.republish_s = flags.get_double("republish");
+  if (options.republish_s <= 0) throw FlagError("--republish must be positive");
+  if (flags.get_bool("self-check") && flags.get_bool("serve")) throw FlagError("--self-check and --serve exclude each other");
+
+  const Calibrate::Mode mode = flags.get_bool("serve")        ? Calibrate::Mode::kServe
+                               : flags.get_bool("self-check") ? Calibrate::Mode::kSelfCheck
+                                                              : Calibrate::Mode::kCalibrate;
+  Calibrate app(options, mode);
+  return app.Run();
+}
+
+}  // namespace
+}  // namespace bricklayer
+
+int main(int argc, char** argv) { return bricklayer::run_main("bricklayer-calibrate", &bricklayer::Main, argc, argv); }
