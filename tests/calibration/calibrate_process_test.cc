@@ -1,0 +1,281 @@
+// bricklayer-calibrate as a real process on a real LCM bus (NETNS: a private network namespace).
+// The test plays projector and camera: it shows every commanded pattern (render_pattern), echoes the
+// command's sequence on BL_PROJECTOR, and streams camera frames rendered by simcam through a random
+// setup as JPEG on BL_IMAGE. The process must calibrate within tolerance, save and publish; then the
+// self-check must pass for the same camera and fail (exit 3) for a moved one.
+#include <catch2/catch.hpp>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/calibration/mapping.h"
+#include "bricklayer/calibration/patterns.h"
+#include "bricklayer/calibration_t.hpp"
+#include "bricklayer/command_t.hpp"
+#include "bricklayer/common/channels.h"
+#include "bricklayer/common/module.h"
+#include "bricklayer/heartbeat_t.hpp"
+#include "bricklayer/image_t.hpp"
+#include "bricklayer/projector_state_t.hpp"
+#include "bricklayer/simcam/render.h"
+
+extern char** environ;
+
+namespace cal = bricklayer::calibration;
+namespace sim = bricklayer::simcam;
+using namespace bricklayer;
+
+namespace {
+
+constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
+
+struct Child {
+  pid_t pid = -1;
+  std::string stderr_path;
+};
+
+Child spawn(const std::vector<std::string>& args, const std::string& stderr_path) {
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 2, stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  Child c;
+  c.stderr_path = stderr_path;
+  const int rc = posix_spawn(&c.pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  REQUIRE(rc == 0);
+  return c;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Projector and camera in one: answers SHOW_PATTERN / CLEAR_PATTERN, streams frames.
+class FakeRig {
+ public:
+  FakeRig(const sim::CameraSetup& camera, const sim::ProjectorSetup& projector, bool answer_projector = true)
+      : module_("fakerig", kUrl), renderer_(camera, projector), answer_projector_(answer_projector) {
+    nuisance_ = sim::Nuisance::level(1);
+    nuisance_.layout_seed = 11;
+    nuisance_.jpeg_quality = 0;  // the bus encoding below is the JPEG round trip
+    module_.subscribe<command_t>(channel(kCommandChannel), [this](const command_t& c) { on_command(c); });
+    module_.subscribe<calibration_t>(channel(kCalibrationChannel), [this](const calibration_t& c) { published = c; });
+    module_.subscribe<heartbeat_t>(channel(kHeartbeatChannel), [this](const heartbeat_t& h) {
+      if (h.module == "calibrate") last_heartbeat = h;
+    });
+    render_frame();
+  }
+
+  // Pumps the bus and streams frames at ~30 Hz until the child exits; returns its exit code.
+  int run_until_exit(const Child& child, double limit_s = 45) {
+    const auto start = std::chrono::steady_clock::now();
+    auto next_frame = start;
+    while (true) {
+      int status = 0;
+      if (waitpid(child.pid, &status, WNOHANG) == child.pid) {
+        for (int i = 0; i < 10; ++i) module_.lcm().handleTimeout(10);  // the last messages
+        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      }
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - start).count() > limit_s) {
+        kill(child.pid, SIGKILL);
+        waitpid(child.pid, &status, 0);
+        FAIL("bricklayer-calibrate did not finish within " << limit_s << " s; stderr:\n" << slurp(child.stderr_path));
+      }
+      if (now >= next_frame) {
+        publish_frame();
+        next_frame = now + std::chrono::milliseconds(33);
+      }
+      module_.lcm().handleTimeout(5);
+    }
+  }
+
+  std::optional<calibration_t> published;
+  std::optional<heartbeat_t> last_heartbeat;
+  int patterns_shown = 0;
+
+ private:
+  void on_command(const command_t& c) {
+    if (c.command == command_t::SHOW_PATTERN) {
+      shown_ = cal::render_pattern(c, renderer_.projector().size);
+      ++patterns_shown;
+    } else if (c.command == command_t::CLEAR_PATTERN) {
+      shown_ = cv::Mat(renderer_.projector().size, CV_8UC3, cv::Scalar(40, 40, 40));
+    } else {
+      return;
+    }
+    render_frame();
+    if (!answer_projector_) return;
+    projector_state_t s{};
+    s.utime = wall_utime();
+    s.frame_number = -1;
+    s.command_sequence = c.sequence;
+    s.mode = projector_state_t::MODE_PATTERN;
+    s.image.source = "fakerig";
+    module_.publish(channel(kProjectorChannel), s);
+  }
+
+  void render_frame() {
+    const cv::Mat* image = shown_.empty() ? nullptr : &shown_;
+    const cv::Mat bgr = renderer_.render(core::Stack{}, nuisance_, image, 1234).bgr;
+    cv::imencode(".jpg", bgr, jpeg_, {cv::IMWRITE_JPEG_QUALITY, 95});
+    size_ = bgr.size();
+  }
+
+  void publish_frame() {
+    image_t img{};
+    img.utime = wall_utime();
+    img.frame_number = frame_number_++;
+    img.width = size_.width;
+    img.height = size_.height;
+    img.format = image_t::FORMAT_JPEG;
+    img.source = "fakerig";
+    img.data = jpeg_;
+    img.size = static_cast<int32_t>(img.data.size());
+    module_.publish(channel(kImageChannel), img);
+  }
+
+  Module module_;
+  sim::Renderer renderer_;
+  bool answer_projector_;
+  sim::Nuisance nuisance_;
+  cv::Mat shown_;
+  std::vector<uint8_t> jpeg_;
+  cv::Size size_;
+  int64_t frame_number_ = 0;
+};
+
+std::string program() { return std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-calibrate"; }
+std::string temp(const std::string& name) { return "/tmp/bl-calibrate-test-" + std::to_string(getpid()) + "-" + name; }
+
+double max_mapping_error(const calibration_t& c, const sim::CameraSetup& camera, const sim::ProjectorSetup& projector) {
+  double worst = 0;
+  for (double y = 10; y <= 470; y += 20) {
+    for (double x = 10; x <= 630; x += 20) {
+      const cv::Point2d p = sim::rectified_to_camera(camera, {x, y});
+      if (p.x < 2 || p.y < 2 || p.x > camera.size.width - 3 || p.y > camera.size.height - 3) continue;
+      worst = std::max(worst, cv::norm(cal::camera_to_projector(c, p) - sim::camera_to_projector(camera, projector, p)));
+    }
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and its self-check catches a moved camera") {
+  const uint64_t seed = 4;
+  const sim::CameraSetup camera = sim::CameraSetup::random(seed);
+  const sim::ProjectorSetup projector = sim::ProjectorSetup::random(seed);
+  const std::string output = temp("calibration.json");
+  std::remove(output.c_str());
+
+  {
+    FakeRig rig(camera, projector);
+    const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--timeout", "3"}, temp("calibrate.err"));
+    const int code = rig.run_until_exit(child);
+    const std::string log = slurp(child.stderr_path);
+    INFO(log);
+    REQUIRE(code == 0);
+    CHECK(rig.patterns_shown == 6);
+    CHECK(log.find("step 6 of 6") != std::string::npos);
+    CHECK(log.find("calibration ok") != std::string::npos);
+    REQUIRE(rig.published.has_value());
+    const calibration_t saved = cal::load_calibration(output);
+    CHECK(saved.utime == rig.published->utime);
+    const double worst = max_mapping_error(saved, camera, projector);
+    INFO("max mapping error " << worst);
+    CHECK(worst < 1.5);
+  }
+  {
+    FakeRig rig(camera, projector);
+    const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--self-check"}, temp("check.err"));
+    const int code = rig.run_until_exit(child);
+    INFO(slurp(child.stderr_path));
+    CHECK(code == 0);
+    REQUIRE(rig.last_heartbeat.has_value());
+    bool found = false;
+    for (int i = 0; i < rig.last_heartbeat->num_values; ++i) {
+      if (rig.last_heartbeat->value_names[i] == "drift_px") {
+        found = true;
+        CHECK(rig.last_heartbeat->values[i] < 1.0);
+      }
+    }
+    CHECK(found);
+  }
+  {
+    sim::CameraSetup moved = camera;
+    moved.rectified_to_camera = cv::Matx33d(1, 0, 5, 0, 1, -3, 0, 0, 1) * camera.rectified_to_camera;
+    FakeRig rig(moved, projector);
+    const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--self-check"}, temp("moved.err"));
+    const int code = rig.run_until_exit(child);
+    const std::string log = slurp(child.stderr_path);
+    INFO(log);
+    CHECK(code == 3);
+    CHECK(log.find("has moved") != std::string::npos);
+  }
+  std::remove(output.c_str());
+}
+
+TEST_CASE("bricklayer-calibrate fails clearly when the projector does not answer") {
+  const sim::CameraSetup camera;
+  const sim::ProjectorSetup projector;
+  FakeRig rig(camera, projector, /*answer_projector=*/false);
+  const std::string output = temp("never.json");
+  const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--timeout", "0.3"}, temp("noprojector.err"));
+  const int code = rig.run_until_exit(child);
+  const std::string log = slurp(child.stderr_path);
+  INFO(log);
+  CHECK(code == 1);
+  CHECK(log.find("is bricklayer-projection running?") != std::string::npos);
+  CHECK_FALSE(std::ifstream(output).good());
+}
+
+TEST_CASE("bricklayer-calibrate refuses bad flags and a bad calibration file") {
+  const std::string bad = temp("bad.json");
+  std::ofstream(bad) << "{\"format\": \"bricklayer-calibration\", \"version\": 1}";
+  struct Case {
+    std::vector<std::string> args;
+    int code;
+    const char* expect;
+  };
+  const std::vector<Case> cases = {
+      {{"--projector-size", "huge"}, 2, "--projector-size"},
+      {{"--max-error-px", "-1"}, 2, "--max-error-px must be positive"},
+      {{"--self-check", "--output", bad}, 1, "missing key"},
+      {{"--self-check", "--output", temp("absent.json")}, 1, "cannot open"},
+      {{"--board", temp("absent-board.json")}, 1, "absent-board.json"},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> args = {program(), "--lcm-url", kUrl};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    const Child child = spawn(args, temp("flags.err"));
+    int status = 0;
+    waitpid(child.pid, &status, 0);
+    const std::string log = slurp(child.stderr_path);
+    INFO(c.args[0] << ": " << log);
+    CHECK(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == c.code);
+    CHECK(log.find(c.expect) != std::string::npos);
+  }
+  std::remove(bad.c_str());
+}
