@@ -49,7 +49,7 @@ std::string fmt(double v, int precision = 3) {
 
 // The model: projector pixel -> normalised projector (pn) -> homography G -> normalised ideal camera
 // (x) -> radial distortion (k1, k2) -> camera pixel. Parameters: G's first 8 entries (G22 = 1), k1, k2.
-constexpr int kParams = 12;
+constexpr int kParams = 13;
 using Params = Eigen::Matrix<double, kParams, 1>;
 
 struct Model {
@@ -74,15 +74,37 @@ struct Model {
   }
 };
 
+// One observation in the fit: a marker corner (anchor = the marker's centre, projector pixels) or a
+// centre (no anchor). Detected corners sit q[12] camera pixels further towards the marker's centre
+// than the true corners (blur rounds the corner; cornerSubPix converges inside it), so the model
+// moves the predicted corner by q[12] along the diagonal. Corners reach half a marker closer to the
+// image border than centres, where the lens matters most.
+struct FitPoint {
+  cv::Point2d projector;
+  cv::Point2d camera;
+  cv::Point2d anchor;
+  bool has_anchor = false;
+  size_t owner = 0;  // index of the correspondence
+};
+
+cv::Point2d predict(const Model& model, const Params& q, const FitPoint& p) {
+  cv::Point2d m = model.project(q, p.projector);
+  if (p.has_anchor) {
+    const cv::Point2d d = model.project(q, p.anchor) - m;
+    const double n = std::hypot(d.x, d.y);
+    if (n > 1e-9) m += d * (q[12] / n);
+  }
+  return m;
+}
+
 // Levenberg-Marquardt with a numeric Jacobian (10 parameters, a few hundred points: microseconds
 // per iteration, no need for more machinery).
-Params levenberg_marquardt(const Model& model, Params q,
-                                                 const std::vector<Correspondence>& pts) {
+Params levenberg_marquardt(const Model& model, Params q, const std::vector<FitPoint>& pts) {
   const int n = static_cast<int>(pts.size());
   auto residuals = [&](const Params& params) {
     Eigen::VectorXd r(2 * n);
     for (int i = 0; i < n; ++i) {
-      const cv::Point2d m = model.project(params, pts[i].projector);
+      const cv::Point2d m = predict(model, params, pts[i]);
       r[2 * i] = m.x - pts[i].camera.x;
       r[2 * i + 1] = m.y - pts[i].camera.y;
     }
@@ -227,7 +249,7 @@ std::vector<Correspondence> detect_marker_correspondences(const cv::Mat& frame, 
     }
     const auto camera_centre = diagonal_intersection(camera_corners);
     if (!camera_centre) continue;
-    out.push_back({*camera_centre, *diagonal_intersection(projector_corners), camera_corners});
+    out.push_back({*camera_centre, *diagonal_intersection(projector_corners), camera_corners, projector_corners, true});
   }
   return out;
 }
@@ -272,19 +294,34 @@ LensFit fit_lens_and_homography(const std::vector<Correspondence>& points, cv::S
   q[10] = 0;
   q[11] = 0;
 
-  std::vector<Correspondence> used = points;
+  q[12] = 0;
+
+  // Corners when every correspondence has them (detected markers), else the points themselves.
+  std::vector<FitPoint> all;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Correspondence& c = points[i];
+    if (c.has_corners) {
+      for (int k = 0; k < 4; ++k) all.push_back({c.projector_corners[k], c.camera_corners[k], c.projector, true, i});
+    } else {
+      all.push_back({c.projector, c.camera, c.projector, false, i});
+    }
+  }
+  std::vector<FitPoint> used = all;
   std::vector<bool> inlier(points.size(), true);
   for (int round = 0; round < 3; ++round) {
     q = levenberg_marquardt(model, q, used);
-    // Re-select inliers from all points against the current fit.
-    used.clear();
+    // Re-select inliers from all points against the current fit: a correspondence is an inlier
+    // when all of its observations are.
+    std::vector<bool> now(points.size(), true);
+    for (const FitPoint& p : all) {
+      if (cv::norm(predict(model, q, p) - p.camera) >= kOutlierCameraPx) now[p.owner] = false;
+    }
     size_t changed = 0;
-    for (size_t i = 0; i < points.size(); ++i) {
-      const cv::Point2d m = model.project(q, points[i].projector);
-      const bool ok = cv::norm(m - points[i].camera) < kOutlierCameraPx;
-      if (ok != inlier[i]) ++changed;
-      inlier[i] = ok;
-      if (ok) used.push_back(points[i]);
+    for (size_t i = 0; i < points.size(); ++i) changed += now[i] != inlier[i];
+    inlier = now;
+    used.clear();
+    for (const FitPoint& p : all) {
+      if (inlier[p.owner]) used.push_back(p);
     }
     if (used.size() < 8) throw std::runtime_error("lens fit: fewer than 8 correspondences agree with the fit");
     if (changed == 0) break;
@@ -292,9 +329,10 @@ LensFit fit_lens_and_homography(const std::vector<Correspondence>& points, cv::S
 
   LensFit fit;
   fit.inlier = inlier;
+  fit.corner_bias_px = q[12];
   double sum2 = 0;
   for (const auto& p : used) {
-    const cv::Point2d m = model.project(q, p.projector);
+    const cv::Point2d m = predict(model, q, p);
     sum2 += (m.x - p.camera.x) * (m.x - p.camera.x) + (m.y - p.camera.y) * (m.y - p.camera.y);
   }
   fit.rms_camera_px = std::sqrt(sum2 / used.size());
@@ -375,12 +413,10 @@ CalibrationResult compute_calibration(const std::vector<cv::Mat>& frames, const 
     for (int i = 0; i < 9; ++i) cal.camera_to_projector[i] = f.camera_to_projector(i / 3, i % 3);
   };
   try {
-    // Twice: the second time with the marker centres taken in undistorted pixels (see recentre_undistorted).
     fit = fit_lens_and_homography(points, camera_size);
     take_fit(fit);
+    // The centres the reprojection error is reported on, taken in undistorted pixels.
     recentre_undistorted(points, cal);
-    fit = fit_lens_and_homography(points, camera_size);
-    take_fit(fit);
   } catch (const std::exception& e) {
     result.status = CalibrationStatus::kTooFewPoints;
     result.message = e.what();

@@ -49,7 +49,9 @@ std::vector<CalibrationStep> calibration_steps(const CalibrationOptions& options
 struct Correspondence {
   cv::Point2d camera;     // camera pixel as captured (distorted)
   cv::Point2d projector;  // projector pixel
-  std::array<cv::Point2d, 4> camera_corners{};  // the marker's detected corners (camera pixels)
+  std::array<cv::Point2d, 4> camera_corners{};     // the marker's detected corners (camera pixels)
+  std::array<cv::Point2d, 4> projector_corners{};  // and where they are in the projector image
+  bool has_corners = false;
 };
 
 // Detects marker set `set` in a camera frame (BGR or grey) and returns one correspondence per
@@ -64,6 +66,7 @@ struct LensFit {
   cv::Matx33d camera_to_projector = cv::Matx33d::eye();  // undistorted camera px -> projector px
   std::vector<bool> inlier;                              // per correspondence
   double rms_camera_px = 0.0;                            // fit residual over inliers, camera pixels
+  double corner_bias_px = 0.0;                           // detected corners' pull towards the marker centre
 };
 // Throws std::runtime_error when there are fewer than 8 correspondences.
 // Recomputes every camera centre as the diagonal intersection of the corners undistorted with cal's
