@@ -1,0 +1,49 @@
+// Best possible overhang of n identical blocks (Paterson & Zwick's model, shared DESIGN.md "The physics").
+//
+// A layout fixes each block's row; positions and contact forces are the unknowns. Every pair of blocks in
+// adjacent rows (and every row-0 block with the surface) gets a resultant force f >= 0 and its moment
+// m = f * p about x = 0; the point of application p must lie in the contact interval [max left ends,
+// min right ends], i.e. f*lo <= m <= f*hi. That is exactly "nonnegative forces at the two ends of the
+// interval" and forces f = 0 on pairs that do not overlap. Equilibrium of every block is linear in (x, f, m);
+// the interval constraints are bilinear. SLSQP (NLopt) maximises the target block's right end; NLopt reports
+// success on infeasible results, so every result's constraint residual is checked here.
+// The search grows layouts block by block (beam search over where the next block goes) with seeded
+// perturbations: deterministic for a given seed.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace bricklayer::planner {
+
+struct PlacedBlock {
+  int row = 0;
+  double x = 0.0;  // left end, block lengths; surface occupies x <= 0
+};
+
+struct OverhangStack {
+  double overhang = 0.0;  // rightmost right end, block lengths
+  double residual = 0.0;  // largest constraint violation of the optimiser's answer
+  std::vector<PlacedBlock> blocks;  // sorted by row, then x
+};
+
+// Optimises the positions of a layout (rows fixed, x the start) for the largest overhang of block target.
+// Returns nothing when SLSQP ends infeasible (residual above tolerance).
+std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& start, int target,
+                                             double tolerance = 1e-9);
+
+struct OverhangSearchOptions {
+  int beam = 6;           // layouts kept per n
+  int perturbations = 4;  // seeded random restarts around the best layouts per n
+  int wall_seeds = 6;     // seeded brick-wall layouts with random row profiles per n (n >= 8)
+  uint64_t seed = 1;
+};
+
+// Best stacks for n = 1..n_max (index n-1). progress(n, best) is called after each n when given.
+std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchOptions& options = {},
+                                                const std::function<void(int, const OverhangStack&)>& progress = {});
+
+}  // namespace bricklayer::planner

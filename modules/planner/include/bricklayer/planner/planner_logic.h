@@ -1,0 +1,59 @@
+// bricklayer-planner's logic without the bus: stacks in, collapse previews and hints out.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+
+#include "bricklayer/collapse_preview_t.hpp"
+#include "bricklayer/core/stack.h"
+#include "bricklayer/hint_t.hpp"
+#include "bricklayer/planner/collapse.h"
+#include "bricklayer/planner/hint.h"
+#include "bricklayer/prediction_t.hpp"
+#include "bricklayer/stack_t.hpp"
+
+namespace bricklayer::planner {
+
+struct PlannerConfig {
+  HintOptions hint;
+  CollapseOptions collapse;
+  size_t max_blocks = 1000;     // larger stacks are ignored (counted as errors by the process)
+  size_t remembered_stacks = 16;  // recent stacks kept to match predictions against
+};
+
+// Converts a measured stack_t; throws core::StackError when it is not a valid stack or not STATUS_OK.
+core::Stack to_core_stack(const stack_t& msg, size_t max_blocks = 1000);
+
+class PlannerLogic {
+ public:
+  explicit PlannerLogic(PlannerConfig config = {}) : config_(std::move(config)) {}
+
+  // Remembers a stack (the newest is the one hints are computed for). Throws core::StackError for an invalid one.
+  void on_stack(const stack_t& msg);
+
+  // The collapse preview for an unbalanced prediction whose stack (same utime and frame_number) was seen.
+  // nullopt for balanced predictions, non-OK statuses, or an unknown stack.
+  std::optional<collapse_preview_t> preview_for(const prediction_t& prediction) const;
+
+  // The hint for the newest stack; nullopt when no stack has been seen yet.
+  std::optional<hint_t> hint_for_newest() const;
+
+  const PlannerConfig& config() const { return config_; }
+
+ private:
+  struct Seen {
+    int64_t utime;
+    int64_t frame_number;
+    core::Stack stack;
+  };
+  PlannerConfig config_;
+  std::deque<Seen> stacks_;
+};
+
+// The message for a preview of `stack` (its block ids in order); times in seconds of real blocks.
+collapse_preview_t to_message(const CollapsePreview& preview, const core::Stack& stack, int64_t utime,
+                              int64_t frame_number);
+
+}  // namespace bricklayer::planner
