@@ -91,6 +91,19 @@ int main(int argc, char** argv) {
     else if (a == "--piles") piles = std::stoi(value());
     else if (a == "--max-nlopt-blocks") max_nlopt = std::stoi(value());
     else if (a == "--only") only = value();
+    else if (a == "--dump") {
+      // Prints one generated pile in bricklayer-predict's input format: --dump BLOCKS SEED
+      const int blocks = std::stoi(value());
+      const uint64_t seed = std::stoull(value());
+      const Stack s = player_pile(blocks, seed);
+      std::printf("{\"block_length\": 1.0, \"block_height\": %.17g, \"table_edge\": 0.0, \"blocks\": [", s.block_height);
+      for (size_t b = 0; b < s.blocks.size(); ++b) {
+        std::printf("%s{\"id\": %lld, \"row\": %d, \"x\": %.17g}", b ? ", " : "", static_cast<long long>(s.blocks[b].id),
+                    s.blocks[b].row, s.blocks[b].x);
+      }
+      std::printf("]}\n");
+      return 0;
+    }
     else if (a == "--help") {
       std::printf("bricklayer-bench-predict [--sizes 10,25,50,60,100,200,500,1000] [--piles 200] "
                   "[--max-nlopt-blocks 100] [--only LABEL-SUBSTRING]\n");
