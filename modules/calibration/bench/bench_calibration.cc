@@ -1,0 +1,208 @@
+// bricklayer-bench-calibration: accuracy and cost of calibration over random simcam setups, and the
+// measurement behind the choice of method (marker corners with a modelled corner bias, marker centres
+// only, or a dense Gray-code map).
+//
+// For seeds 1..N and a nuisance level: renders every calibration pattern through
+// CameraSetup::random(seed) / ProjectorSetup::random(seed), calibrates, and compares camera ->
+// projector with the truth over a grid covering the board. Prints per method the median and p99 (over
+// setups) of the mean and max mapping error, and the median / p99 time of compute_calibration.
+//
+//   bricklayer-bench-calibration [--setups 20] [--nuisance mild] [--gray-code]
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "bricklayer/calibration/calibrator.h"
+#include "bricklayer/calibration/mapping.h"
+#include "bricklayer/calibration/patterns.h"
+#include "bricklayer/common/flags.h"
+#include "bricklayer/simcam/render.h"
+
+namespace bricklayer {
+namespace {
+
+namespace cal = calibration;
+namespace sim = simcam;
+
+struct Stats {
+  std::vector<double> mean, max, ms, colour;
+};
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t i = std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5));
+  return v[i];
+}
+
+void mapping_error(const calibration_t& c, const sim::CameraSetup& camera, const sim::ProjectorSetup& projector, Stats& s) {
+  double sum = 0, max = 0;
+  int n = 0;
+  for (double y = 10; y <= 470; y += 20) {
+    for (double x = 10; x <= 630; x += 20) {
+      const cv::Point2d p = sim::rectified_to_camera(camera, {x, y});
+      if (p.x < 2 || p.y < 2 || p.x > camera.size.width - 3 || p.y > camera.size.height - 3) continue;
+      const double d = cv::norm(cal::camera_to_projector(c, p) - sim::camera_to_projector(camera, projector, p));
+      sum += d;
+      max = std::max(max, d);
+      ++n;
+    }
+  }
+  s.mean.push_back(sum / std::max(1, n));
+  s.max.push_back(max);
+}
+
+// A fit into a calibration_t that only carries the lens and camera_to_projector (enough for mapping).
+calibration_t from_fit(const cal::LensFit& fit, cv::Size camera, cv::Size projector) {
+  calibration_t c{};
+  c.camera_width = camera.width;
+  c.camera_height = camera.height;
+  c.projector_width = projector.width;
+  c.projector_height = projector.height;
+  c.camera_matrix[0] = fit.camera_matrix(0, 0);
+  c.camera_matrix[1] = fit.camera_matrix(1, 1);
+  c.camera_matrix[2] = fit.camera_matrix(0, 2);
+  c.camera_matrix[3] = fit.camera_matrix(1, 2);
+  for (int i = 0; i < 5; ++i) c.distortion[i] = fit.distortion[i];
+  for (int i = 0; i < 9; ++i) c.camera_to_projector[i] = fit.camera_to_projector(i / 3, i % 3);
+  return c;
+}
+
+// Dense Gray code: bits whose stripes are at least 4 projector pixels wide (finer ones blur away in a
+// 640-wide camera), each against its inverse; every 3rd camera pixel whose every bit is decisive
+// gives (camera pixel, centre of its 4-pixel projector stripe).
+std::vector<cal::Correspondence> gray_code_points(const sim::Renderer& r, const sim::Nuisance& n, uint64_t seed) {
+  const cv::Size psize = r.projector().size;
+  const int total = cal::gray_code_image_count(psize);
+  constexpr int kSkipBits = 2;
+  cv::Mat col_code, row_code, valid;
+  const cv::Size csize = r.camera().size;
+  col_code = cv::Mat::zeros(csize, CV_32S);
+  row_code = cv::Mat::zeros(csize, CV_32S);
+  valid = cv::Mat(csize, CV_8U, cv::Scalar(1));
+  for (int i = 0; i < total; i += 2) {
+    const cal::GrayCodeBit b = cal::gray_code_bit(i, psize);
+    if (b.bit < kSkipBits) continue;
+    command_t cmd{};
+    cmd.command = command_t::SHOW_PATTERN;
+    cmd.pattern = command_t::PATTERN_GRAY_CODE;
+    cmd.index = i;
+    const cv::Mat shown = cal::render_pattern(cmd, psize);
+    cmd.index = i + 1;
+    const cv::Mat inverse = cal::render_pattern(cmd, psize);
+    cv::Mat a, bimg;
+    cv::cvtColor(r.render(core::Stack{}, n, &shown, seed + i).bgr, a, cv::COLOR_BGR2GRAY);
+    cv::cvtColor(r.render(core::Stack{}, n, &inverse, seed + i + 1).bgr, bimg, cv::COLOR_BGR2GRAY);
+    for (int y = 0; y < csize.height; ++y) {
+      for (int x = 0; x < csize.width; ++x) {
+        const int d = static_cast<int>(a.at<uchar>(y, x)) - static_cast<int>(bimg.at<uchar>(y, x));
+        if (std::abs(d) < 10) valid.at<uchar>(y, x) = 0;
+        cv::Mat& code = b.columns ? col_code : row_code;
+        if (d > 0) code.at<int>(y, x) |= 1 << (b.bit - kSkipBits);
+      }
+    }
+  }
+  auto binary = [](int g) {
+    for (int shift = 1; shift < 32; shift <<= 1) g ^= g >> shift;
+    return g;
+  };
+  std::vector<cal::Correspondence> out;
+  for (int y = 1; y < csize.height; y += 3) {
+    for (int x = 1; x < csize.width; x += 3) {
+      if (!valid.at<uchar>(y, x)) continue;
+      const double px = binary(col_code.at<int>(y, x)) * 4 + 1.5;
+      const double py = binary(row_code.at<int>(y, x)) * 4 + 1.5;
+      cal::Correspondence c;
+      c.camera = cv::Point2d(x, y);
+      c.projector = cv::Point2d(px, py);
+      out.push_back(c);
+    }
+  }
+  return out;
+}
+
+int Main(int argc, char** argv) {
+  Flags flags("bricklayer-bench-calibration", "Calibration accuracy and cost over random simcam setups.");
+  flags.add("setups", "20", "random setups (seeds 1..N)");
+  flags.add("nuisance", "mild", "simcam nuisance level: clean, mild, strong, harsh");
+  flags.add_bool("gray-code", "also measure a dense Gray-code map (32 more frames per setup; slow)");
+  if (!flags.parse(argc, argv)) return 0;
+  const int setups = static_cast<int>(flags.get_int("setups"));
+  sim::Nuisance nuisance = sim::Nuisance::named(flags.get("nuisance"));
+  nuisance.layout_seed = 7;
+
+  cal::CalibrationOptions options;
+  const auto steps = cal::calibration_steps(options);
+  Stats corners, centres, gray;
+  int rejected = 0;
+  for (int seed = 1; seed <= setups; ++seed) {
+    const sim::CameraSetup camera = sim::CameraSetup::random(seed);
+    const sim::ProjectorSetup projector = sim::ProjectorSetup::random(seed);
+    const sim::Renderer renderer(camera, projector);
+    std::vector<cv::Mat> frames;
+    for (size_t i = 0; i < steps.size(); ++i) {
+      const cv::Mat shown = cal::render_pattern(steps[i].command, projector.size);
+      frames.push_back(renderer.render(core::Stack{}, nuisance, &shown, seed * 100 + i).bgr);
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    const cal::CalibrationResult result = cal::compute_calibration(frames, options, 0);
+    corners.ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    if (result.status != cal::CalibrationStatus::kOk) {
+      ++rejected;
+      std::printf("seed %d rejected: %s\n", seed, result.message.c_str());
+      continue;
+    }
+    mapping_error(result.calibration, camera, projector, corners);
+    {
+      const cv::Matx33d m = cal::colour_mixing(result.calibration);
+      const double scale = std::max({projector.mixing(0, 0), projector.mixing(1, 1), projector.mixing(2, 2)});
+      double worst = 0;
+      for (int i = 0; i < 9; ++i) worst = std::max(worst, std::abs(m.val[i] - projector.mixing.val[i]) / scale);
+      corners.colour.push_back(100 * worst);
+    }
+
+    // Centres only: the same detections without the corners.
+    auto points = cal::detect_marker_correspondences(frames[4], cal::kMarkerSetGrid, projector.size);
+    const auto more = cal::detect_marker_correspondences(frames[5], cal::kMarkerSetShiftedGrid, projector.size);
+    points.insert(points.end(), more.begin(), more.end());
+    for (auto& p : points) p.has_corners = false;
+    const auto t1 = std::chrono::steady_clock::now();
+    const cal::LensFit centre_fit = cal::fit_lens_and_homography(points, camera.size);
+    centres.ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count());
+    mapping_error(from_fit(centre_fit, camera.size, projector.size), camera, projector, centres);
+
+    if (flags.get_bool("gray-code")) {
+      const auto dense = gray_code_points(renderer, nuisance, seed * 1000);
+      const auto t2 = std::chrono::steady_clock::now();
+      const cal::LensFit gray_fit = cal::fit_lens_and_homography(dense, camera.size);
+      gray.ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t2).count());
+      mapping_error(from_fit(gray_fit, camera.size, projector.size), camera, projector, gray);
+    }
+  }
+  auto report = [](const char* name, const Stats& s, const char* what_ms) {
+    if (s.mean.empty()) return;
+    std::printf("%-34s mean err median %.3f p99 %.3f | max err median %.3f p99 %.3f px | %s median %.1f p99 %.1f ms\n", name,
+                percentile(s.mean, 0.5), percentile(s.mean, 0.99), percentile(s.max, 0.5), percentile(s.max, 0.99), what_ms,
+                percentile(s.ms, 0.5), percentile(s.ms, 0.99));
+  };
+  std::printf("%d setups, nuisance %s, %d rejected; errors in projector pixels over the board grid\n", setups,
+              flags.get("nuisance").c_str(), rejected);
+  report("markers, corners + corner bias", corners, "compute_calibration");
+  if (!corners.colour.empty()) {
+    std::printf("colour mixing: worst entry error median %.2f%% p99 %.2f%% of the largest diagonal entry\n",
+                percentile(corners.colour, 0.5), percentile(corners.colour, 0.99));
+  }
+  report("markers, centres only", centres, "fit");
+  report("Gray code, dense (bits >= 2)", gray, "fit");
+  return 0;
+}
+
+}  // namespace
+}  // namespace bricklayer
+
+int main(int argc, char** argv) { return bricklayer::run_main("bricklayer-bench-calibration", &bricklayer::Main, argc, argv); }
