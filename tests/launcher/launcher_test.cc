@@ -162,6 +162,20 @@ TEST_CASE("a module that never sends a heartbeat fails the start, and everything
   CHECK(dir.read("launch.out").find("FAILED to start") != std::string::npos);
 }
 
+TEST_CASE("a module that keeps exiting before it comes up fails the start instead of looping") {
+  TempDir dir("crashloop");
+  auto profile = dir.write("p.json", R"({"modules":[
+      {"name":"broken","command":["/bin/false"],"heartbeat":"broken"}]})");
+  auto launcher = launch(dir, profile);
+  auto st = launcher.wait_for(15s);
+  REQUIRE(st);
+  CHECK(st->code == 1);
+  std::string out = dir.read("launch.out");
+  INFO(out << dir.read("launch.err"));
+  CHECK(out.find("restart #2") != std::string::npos);
+  CHECK(out.find("broken keeps exiting before it comes up (exit code 1): giving up") != std::string::npos);
+}
+
 TEST_CASE("a run with a duration stops by itself (SIGTERM, deadline, SIGKILL) and the logger records it") {
   TempDir dir("duration");
   auto profile = dir.write("p.json", R"({"stop_timeout_s":0.5,

@@ -44,7 +44,10 @@ Supervisor::Supervisor(Profile profile, SupervisorOptions options)
       std::string where;
       for (const auto& d : options_.bin_dirs) where += d + ", ";
       missing.push_back("module '" + who + "' needs '" + argv[0] + "', which was not found (looked in " + where +
-                        "then PATH; not built yet? cmake --build build --target " +
+                        "then PATH; not built yet? cmake --build " +
+                        (options_.bin_dirs.empty() ? std::string("build")
+                                                   : fs::path(options_.bin_dirs.front()).parent_path().string()) +
+                        " --target " +
                         fs::path(argv[0]).filename().string() + ")");
     }
     argv[0] = path;
@@ -170,6 +173,15 @@ void Supervisor::tick() {
       continue;
     }
     m.quick_failures = up_long ? 0 : m.quick_failures + 1;
+    if (!all_up_announced_ && !m.has_beat && m.quick_failures >= 3) {
+      log::error(m.spec.name, " exited ", m.quick_failures, " times before its first heartbeat (last: ", m.last_exit,
+                 "); see its output above. Stopping.");
+      say(m.spec.name + " keeps exiting before it comes up (" + m.last_exit + "): giving up");
+      fatal_ = true;
+      Module::request_stop();
+      m.state = State::kExited;
+      continue;
+    }
     double delay = std::min(5.0, 0.1 * std::pow(2.0, std::max(0, m.quick_failures - 1)));
     log::warn(m.spec.name, " (pid ", m.proc.pid(), ") died: ", m.last_exit, "; restarting in ", format_seconds(delay), " s");
     say(m.spec.name + " (pid " + std::to_string(m.proc.pid()) + ") died: " + m.last_exit + "; restarting in " +
