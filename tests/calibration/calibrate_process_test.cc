@@ -16,6 +16,7 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -31,6 +32,7 @@
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/image_t.hpp"
 #include "bricklayer/projector_state_t.hpp"
+#include "bricklayer/stack_t.hpp"
 #include "bricklayer/simcam/render.h"
 
 extern char** environ;
@@ -108,6 +110,49 @@ class FakeRig {
       }
       module_.lcm().handleTimeout(5);
     }
+  }
+
+  // Pumps the bus and streams frames until done() is true or limit_s passes; returns done().
+  bool run_until(const std::function<bool()>& done, double limit_s) {
+    const auto start = std::chrono::steady_clock::now();
+    auto next_frame = start;
+    while (!done()) {
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - start).count() > limit_s) return false;
+      if (now >= next_frame) {
+        publish_frame();
+        next_frame = now + std::chrono::milliseconds(33);
+      }
+      module_.lcm().handleTimeout(5);
+    }
+    return true;
+  }
+
+  void publish_stack(int blocks) {
+    bricklayer::stack_t s{};
+    s.block_length = 1;
+    s.block_height = 1.0 / 3;
+    s.status = bricklayer::stack_t::STATUS_OK;
+    s.num_blocks = blocks;
+    s.blocks.resize(blocks);
+    for (int i = 0; i < blocks; ++i) s.blocks[i].id = i;
+    module_.publish(channel(kStackChannel), s);
+  }
+
+  void send_self_check() {
+    command_t c{};
+    c.command = command_t::SELF_CHECK;
+    c.sequence = 1;
+    c.argument = "";
+    module_.publish(channel(kCommandChannel), c);
+  }
+
+  std::optional<double> heartbeat_value(const std::string& name) const {
+    if (!last_heartbeat) return std::nullopt;
+    for (int i = 0; i < last_heartbeat->num_values; ++i) {
+      if (last_heartbeat->value_names[i] == name) return last_heartbeat->values[i];
+    }
+    return std::nullopt;
   }
 
   std::optional<calibration_t> published;
@@ -221,6 +266,35 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
       }
     }
     CHECK(found);
+  }
+  {
+    // --serve: publishes the saved calibration, self-checks on command only when the board is empty.
+    sim::CameraSetup moved = camera;
+    moved.rectified_to_camera = cv::Matx33d(1, 0, -4, 0, 1, 4, 0, 0, 1) * camera.rectified_to_camera;
+    FakeRig rig(moved, projector);
+    const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--serve"}, temp("serve.err"));
+    CHECK(rig.run_until([&] { return rig.published.has_value(); }, 10));
+    rig.publish_stack(3);
+    rig.run_until([] { return false; }, 0.3);
+    rig.send_self_check();
+    rig.run_until([] { return false; }, 1.5);
+    CHECK(rig.patterns_shown == 0);  // not with blocks on the board
+    rig.publish_stack(0);
+    rig.run_until([] { return false; }, 0.3);
+    rig.send_self_check();
+    const bool measured = rig.run_until([&] { return rig.heartbeat_value("drift_px").has_value(); }, 10);
+    kill(child.pid, SIGTERM);
+    int status = 0;
+    waitpid(child.pid, &status, 0);
+    const std::string log = slurp(child.stderr_path);
+    INFO(log);
+    CHECK(measured);
+    CHECK(rig.patterns_shown == 1);
+    CHECK(rig.heartbeat_value("drift_px").value_or(0) > 3.0);
+    CHECK(log.find("board is not empty") != std::string::npos);
+    CHECK(log.find("has moved") != std::string::npos);
+    CHECK(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 0);
   }
   {
     sim::CameraSetup moved = camera;
