@@ -21,6 +21,7 @@ struct Sparse {
 
 struct Context {
   const Problem* problem = nullptr;
+  double scale = 1.0;  // the objective is multiplied by this (SLSQP behaves best with O(1) gradients)
   Sparse q;  // by first variable
   // Inequalities g(x) <= 0 and equalities h(x) = 0, each a sparse row of A (sign, offset).
   struct Row {
@@ -45,7 +46,10 @@ double objective(unsigned n, const double* x, double* grad, void* data) {
       if (grad) grad[i] += t.value * x[t.col];  // Q symmetric
     }
   }
-  return value;
+  if (grad) {
+    for (unsigned i = 0; i < n; ++i) grad[i] *= ctx->scale;
+  }
+  return value * ctx->scale;
 }
 
 void constraints(const std::vector<Context::Row>& which, const Context& ctx, unsigned m, double* result, unsigned n,
@@ -89,6 +93,10 @@ class NloptSolver final : public Solver {
     }
     Context ctx;
     ctx.problem = &problem;
+    double largest = 0.0;
+    for (double c : problem.cost) largest = std::max(largest, std::abs(c));
+    for (const Entry& e : problem.q) largest = std::max(largest, std::abs(e.value));
+    ctx.scale = largest > 0.0 ? 1.0 / largest : 1.0;
     ctx.q.rows.resize(static_cast<size_t>(n));
     for (const Entry& e : problem.q) ctx.q.rows[static_cast<size_t>(e.row)].push_back({e.col, e.value});
     ctx.a.rows.resize(static_cast<size_t>(problem.num_rows()));
