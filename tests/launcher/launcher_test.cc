@@ -131,6 +131,56 @@ TEST_CASE("kill -9 of the prediction under the launcher: heartbeat back within 2
   CHECK(::kill(back.pid, 0) != 0);  // the restarted prediction was stopped too
 }
 
+TEST_CASE("a hung module (heartbeat stops) is killed and restarted") {
+  TempDir dir("hang");
+  auto profile = dir.write("p.json", R"({"modules":[
+      {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"],"heartbeat_timeout_s":1.5}]})");
+  auto launcher = launch(dir, profile);
+  test::Listener bus;
+  REQUIRE(bus.ok());
+  bus.listen(channel(kHeartbeatChannel));
+  heartbeat_t hb{};
+  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", hb); }, 10s));
+  const pid_t hung = hb.pid;
+  REQUIRE(::kill(hung, SIGSTOP) == 0);  // alive but silent
+  heartbeat_t back{};
+  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", back) && back.pid != hung; }, 8s));
+  CHECK(back.restarts == 1);
+  launcher.signal(SIGTERM);
+  REQUIRE(launcher.wait_for(15s));
+  std::string out = dir.read("launch.out");
+  INFO(out);
+  CHECK(out.find("prediction silent for 1.5 s: killing it") != std::string::npos);
+  CHECK(out.find("died: killed by signal 9") != std::string::npos);
+}
+
+TEST_CASE("launch/bricklayer runs a profile with the build's binaries and stops after --duration") {
+  TempDir dir("wrapper");
+  auto profile = dir.write("p.json", R"({"modules":[
+      {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]}]})");
+  launcher::SpawnOptions o;
+  o.stdout_path = (dir.path / "wrapper.out").string();
+  o.merge_stderr = true;
+  o.env = {std::string("BRICKLAYER_BUILD_DIR=") + BRICKLAYER_BINARY_DIR, std::string("LCM_DEFAULT_URL=") + test::kTestUrl};
+  auto wrapper = launcher::Process::spawn(
+      {std::string(BRICKLAYER_SOURCE_DIR) + "/launch/bricklayer", profile.string(), "--duration", "1"}, o);
+  auto st = wrapper.wait_for(20s);
+  REQUIRE(st);
+  std::string out = dir.read("wrapper.out");
+  INFO(out);
+  CHECK(st->clean());
+  CHECK(out.find("prediction up (pid") != std::string::npos);
+  CHECK(out.find("summary of profile p") != std::string::npos);
+
+  auto unknown = launcher::Process::spawn({std::string(BRICKLAYER_SOURCE_DIR) + "/launch/bricklayer", "no-such-profile"}, o);
+  auto ust = unknown.wait_for(10s);
+  REQUIRE(ust);
+  CHECK(ust->code == 2);
+  out = dir.read("wrapper.out");
+  CHECK(out.find("no profile 'no-such-profile'") != std::string::npos);
+  CHECK(out.find("demo") != std::string::npos);  // the list of profiles follows
+}
+
 TEST_CASE("a profile naming a binary that does not exist is a clear error before anything starts") {
   TempDir dir("missing");
   auto profile = dir.write("p.json", R"({"modules":[

@@ -8,6 +8,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <filesystem>
+#include <unistd.h>
 #include <sstream>
 
 #include "bricklayer/common/channels.h"
@@ -47,10 +48,20 @@ class LogWriter {
   int64_t n_ = 0;
 };
 
+// One folder per test process, removed when the process ends.
+struct TempFolder {
+  std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("bricklayer-replay-test-" + std::to_string(::getpid()));
+  TempFolder() { std::filesystem::create_directories(path); }
+  ~TempFolder() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+};
+
 std::string temp_log(const std::string& name) {
-  auto dir = std::filesystem::temp_directory_path() / ("bricklayer-replay-test-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
+  static TempFolder folder;
+  return (folder.path / name).string();
 }
 
 struct Recording {
