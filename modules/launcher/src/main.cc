@@ -37,7 +37,6 @@ int Main(int argc, char** argv) {
   flags.add("bin-dir", "", "where bare program names are looked up before PATH (default: this binary's directory)");
   flags.add("duration", "", "stop by itself after this many seconds (default: the profile's; 0 = until Ctrl-C)");
   flags.add("lcm-url", "", "LCM URL for every module (default: LCM_DEFAULT_URL, else host-only ttl=0)");
-  flags.add_bool("allow-routed", "allow a udpm ttl above 1 (routed beyond the LAN)");
   flags.add("log-level", "info", "debug, info, warn or error");
   if (!flags.parse(argc, argv)) return 0;
   log::set_level(log::parse_level(flags.get("log-level")));
@@ -71,7 +70,7 @@ int Main(int argc, char** argv) {
   options.bin_dirs = {fs::absolute(bin).string()};
   options.lcm_url = resolve_lcm_url(flags.get("lcm-url"));
   try {
-    check_lcm_url(options.lcm_url, flags.get_bool("allow-routed"));
+    check_lcm_url(options.lcm_url);
   } catch (const std::invalid_argument& e) {
     throw FlagError(e.what());
   }
