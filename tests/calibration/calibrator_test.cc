@@ -78,6 +78,7 @@ TEST_CASE("Twenty random setups: mapping within 0.5 px mean / 1.5 px max, colour
     INFO("seed " << seed << ": " << result.message);
     REQUIRE(result.status == cal::CalibrationStatus::kOk);
     REQUIRE_NOTHROW(cal::validate_calibration(result.calibration));
+    CHECK(result.shelf.found);
 
     const MappingError e = mapping_error(result.calibration, camera, projector);
     INFO("mapping error mean " << e.mean << " max " << e.max << " over " << e.points << " grid points");
@@ -182,5 +183,59 @@ TEST_CASE("Calibrations that cannot be trusted are rejected with a clear message
     const auto result = cal::compute_calibration(capture(renderer, cal::calibration_steps(bright), calibration_nuisance(), seed), bright, 1);
     INFO(result.message);
     CHECK(result.status == cal::CalibrationStatus::kSaturated);
+  }
+}
+
+namespace {
+// Board coordinates (block lengths) of a camera pixel, as the setup defines them.
+cv::Point2d true_board(const sim::CameraSetup& camera, cv::Point2d camera_px) {
+  const cv::Point2d r = sim::camera_to_rectified(camera, camera_px);
+  return {(r.x - camera.board.edge_x_px) / camera.board.block_length_px,
+          (camera.board.surface_y_px - r.y) / camera.board.block_length_px};
+}
+}  // namespace
+
+TEST_CASE("The board frame: exact with a square projector, shelf-anchored with a tilted one") {
+  cal::CalibrationOptions options;
+  const auto steps = cal::calibration_steps(options);
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    const sim::CameraSetup camera = sim::CameraSetup::random(seed);
+    SECTION("square projector, seed " + std::to_string(seed)) {
+      const sim::ProjectorSetup projector;  // mounted square: projector pixel = 1.6 rectified pixels
+      const sim::Renderer renderer(camera, projector);
+      const auto result = cal::compute_calibration(capture(renderer, steps, calibration_nuisance(), seed), options, 1);
+      INFO(result.message);
+      REQUIRE(result.status == cal::CalibrationStatus::kOk);
+      CHECK(result.shelf.found);
+      double worst = 0;
+      for (double y = 10; y <= 470; y += 20) {
+        for (double x = 10; x <= 630; x += 20) {
+          const cv::Point2d p = sim::rectified_to_camera(camera, {x, y});
+          if (p.x < 2 || p.y < 2 || p.x > 637 || p.y > 477) continue;
+          worst = std::max(worst, cv::norm(cal::camera_to_board(result.calibration, p) - true_board(camera, p)));
+        }
+      }
+      INFO("worst board error " << worst << " block lengths");
+      CHECK(worst < 0.02);
+    }
+    SECTION("random projector, seed " + std::to_string(seed)) {
+      const sim::ProjectorSetup projector = sim::ProjectorSetup::random(seed);
+      const sim::Renderer renderer(camera, projector);
+      const auto result = cal::compute_calibration(capture(renderer, steps, calibration_nuisance(), seed), options, 1);
+      INFO(result.message);
+      REQUIRE(result.status == cal::CalibrationStatus::kOk);
+      REQUIRE(result.shelf.found);
+      // The surface edge is the board origin and the surface top is level; the scale is the
+      // projector's (not observable on an empty board).
+      const auto at = [&](double bx, double by) {
+        const cv::Point2d r(camera.board.to_px_x(bx), camera.board.to_px_y(by));
+        return cal::camera_to_board(result.calibration, sim::rectified_to_camera(camera, r));
+      };
+      const cv::Point2d origin = at(0, 0);
+      INFO("origin maps to " << origin);
+      CHECK(std::abs(origin.x) < 0.03);
+      CHECK(std::abs(origin.y) < 0.03);
+      for (double bx = -4; bx <= 4; bx += 1) CHECK(std::abs(at(bx, 0).y) < 0.03);
+    }
   }
 }

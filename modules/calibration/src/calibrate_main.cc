@@ -393,6 +393,7 @@ int Main(int argc, char** argv) {
   flags.add("colour-drive", "80", "projector level 1..255 for the red, green and blue frames (lower if the camera saturates)");
   flags.add("drift-threshold", "2.0", "self-check: warn above this mean drift, projector pixels");
   flags.add("republish", "5", "--serve: seconds between re-publications of the calibration");
+  flags.add_bool("no-shelf", "do not anchor the board frame on the detected shelf; use --board exactly as given");
   flags.add_bool("self-check", "check the saved calibration for drift once and exit (3 = drift above threshold)");
   flags.add_bool("serve", "publish the saved calibration and self-check on command SELF_CHECK when the board is empty");
   if (!flags.parse(argc, argv)) return 0;
@@ -406,6 +407,7 @@ int Main(int argc, char** argv) {
   if (options.output.empty()) throw FlagError("--output must name a file");
   if (!flags.get("board").empty()) options.calibration.board = load_board_geometry(flags.get("board"));
   options.calibration.projector_size = parse_size(flags.get("projector-size"));
+  options.calibration.board_from_shelf = !flags.get_bool("no-shelf");
   options.calibration.max_error_px = flags.get_double("max-error-px");
   if (options.calibration.max_error_px <= 0) throw FlagError("--max-error-px must be positive");
   options.timeout_s = flags.get_double("timeout");

@@ -425,9 +425,44 @@ CalibrationResult compute_calibration(const std::vector<cv::Mat>& frames, const 
 
   const double scale = static_cast<double>(camera_size.width) / options.projector_size.width;
   const cv::Matx33d rectified_from_projector(scale, 0, 0, 0, scale, 0, 0, 0, 1);
+  const cv::Matx33d rectified_from_camera = rectified_from_projector * fit.camera_to_projector;
+  cv::Matx33d board_anchor = cv::Matx33d::eye();  // rectified -> rectified: the shelf correction
+  if (options.board_from_shelf) {
+    // The projector's light on the board, seen in the rectified frame (ambient and shadows cancel).
+    cv::Mat light = cv::Mat::zeros(camera_size, CV_32F);
+    for (int f = 1; f <= 3; ++f) {
+      cv::Mat diff;
+      cv::absdiff(frames[f], frames[0], diff);
+      cv::Mat gray;
+      cv::cvtColor(diff, gray, cv::COLOR_BGR2GRAY);
+      cv::accumulate(gray, light);
+    }
+    const cv::Matx33d camera_from_rectified = rectified_from_camera.inv();
+    cv::Mat map_x(camera_size, CV_32F), map_y(camera_size, CV_32F);
+    for (int y = 0; y < camera_size.height; ++y) {
+      for (int x = 0; x < camera_size.width; ++x) {
+        const cv::Point2d c = distort_point(cal, apply_homography(camera_from_rectified, cv::Point2d(x, y)));
+        map_x.at<float>(y, x) = static_cast<float>(c.x);
+        map_y.at<float>(y, x) = static_cast<float>(c.y);
+      }
+    }
+    cv::Mat rectified;
+    cv::remap(light + 1.0f, rectified, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+    result.shelf = find_shelf_corner(rectified, options.board);
+    if (result.shelf.found) {
+      // Rotate about the detected corner so the shelf top is level, then move the corner onto the
+      // geometry's (edge, surface).
+      const double ca = std::cos(-result.shelf.angle_rad), sa = std::sin(-result.shelf.angle_rad);
+      const cv::Point2d c = result.shelf.corner;
+      const cv::Matx33d to_origin(1, 0, -c.x, 0, 1, -c.y, 0, 0, 1);
+      const cv::Matx33d rotate(ca, -sa, 0, sa, ca, 0, 0, 0, 1);
+      const cv::Matx33d to_nominal(1, 0, options.board.edge_x_px, 0, 1, options.board.surface_y_px, 0, 0, 1);
+      board_anchor = to_nominal * rotate * to_origin;
+    }
+  }
   const auto board = options.board.camera_to_board();
   const cv::Matx33d board_from_rectified(board.data());
-  cv::Matx33d to_board = board_from_rectified * rectified_from_projector * fit.camera_to_projector;
+  cv::Matx33d to_board = board_from_rectified * board_anchor * rectified_from_camera;
   for (int i = 0; i < 9; ++i) cal.camera_to_board[i] = to_board(i / 3, i % 3);
   for (int i = 0; i < 9; ++i) cal.colour_mixing[i] = colour.mixing(i / 3, i % 3);
   for (int i = 0; i < 3; ++i) cal.ambient_bgr[i] = colour.ambient[i];
@@ -476,8 +511,126 @@ CalibrationResult compute_calibration(const std::vector<cv::Mat>& frames, const 
     return result;
   }
   result.status = CalibrationStatus::kOk;
-  result.message = "calibration ok: " + summary;
+  result.message = "calibration ok: " + summary + "; board frame: " +
+                   (!options.board_from_shelf ? std::string("from --board as given")
+                    : result.shelf.found       ? result.shelf.message
+                                               : "shelf not found (" + result.shelf.message + "), --board geometry as given");
   return result;
+}
+
+ShelfCorner find_shelf_corner(const cv::Mat& light, const BoardGeometry& nominal) {
+  ShelfCorner out;
+  if (light.empty() || light.type() != CV_32F) {
+    out.message = "no light image";
+    return out;
+  }
+  cv::Mat smooth;
+  cv::GaussianBlur(light, smooth, cv::Size(0, 0), 1.2);
+  auto valid = [&](int x, int y) { return x >= 0 && y >= 0 && x < light.cols && y < light.rows && light.at<float>(y, x) > 0; };
+  auto at = [&](int x, int y) { return smooth.at<float>(y, x); };
+
+  // 1. The shelf top: in each column, the strongest bright-above / dark-below step near the nominal row.
+  struct Hit { double x, y; };
+  std::vector<Hit> hits;
+  const int y_lo = std::max(3, static_cast<int>(nominal.surface_y_px - 90));
+  const int y_hi = std::min(light.rows - 4, static_cast<int>(nominal.surface_y_px + 40));
+  for (int x = 4; x < light.cols - 4; x += 3) {
+    double best = 0;
+    int best_y = -1;
+    for (int y = y_lo; y <= y_hi; ++y) {
+      // Well inside the seen part: the blur mixes the unseen border in within ~4 px.
+      if (!valid(x, y - 7) || !valid(x, y + 7) || !valid(x - 5, y) || !valid(x + 5, y)) continue;
+      const double above = at(x, y - 3), below = at(x, y + 3);
+      const double drop = (above - below) / std::max(1e-3, static_cast<double>(above));
+      if (drop > best) {
+        best = drop;
+        best_y = y;
+      }
+    }
+    if (best < 0.15 || best_y < 0) continue;  // no shelf in this column (glass all the way)
+    // Sub-pixel: parabola through the step strength around the best row.
+    auto step = [&](int y) { return static_cast<double>(at(x, y - 2) - at(x, y + 2)); };
+    const double a = step(best_y - 1), b = step(best_y), c = step(best_y + 1);
+    const double den = a - 2 * b + c;
+    const double dy = std::abs(den) > 1e-9 ? std::clamp(0.5 * (a - c) / den, -0.5, 0.5) : 0.0;
+    hits.push_back({static_cast<double>(x), best_y + dy});
+  }
+  if (hits.size() < 10) {
+    out.message = "shelf top not seen (" + std::to_string(hits.size()) + " columns)";
+    return out;
+  }
+  // The shelf occupies the left part: its end is where the run of hits starting at the left stops.
+  std::sort(hits.begin(), hits.end(), [](const Hit& p, const Hit& q) { return p.x < q.x; });
+  std::vector<Hit> run;
+  for (const Hit& h : hits) {
+    if (!run.empty() && (h.x - run.back().x > 12 || std::abs(h.y - run.back().y) > 4)) {
+      if (run.size() >= 10) break;  // the first long run is the shelf
+      run.clear();
+    }
+    run.push_back(h);
+  }
+  if (run.size() < 10) {
+    out.message = "shelf top not continuous";
+    return out;
+  }
+  // 2. Line fit y = m x + k (least squares, then once more without points more than 1 px off).
+  auto fit_line = [](const std::vector<Hit>& pts, double& m, double& k) {
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (const Hit& p : pts) { sx += p.x; sy += p.y; sxx += p.x * p.x; sxy += p.x * p.y; }
+    const double n = static_cast<double>(pts.size());
+    const double den = n * sxx - sx * sx;
+    m = std::abs(den) > 1e-9 ? (n * sxy - sx * sy) / den : 0.0;
+    k = (sy - m * sx) / n;
+  };
+  // Leave out the last few columns before the end: the step fades there.
+  std::vector<Hit> inner(run.begin(), run.end() - std::min<size_t>(3, run.size() / 4));
+  double m = 0, k = 0;
+  fit_line(inner, m, k);
+  std::vector<Hit> kept;
+  for (const Hit& h : inner) if (std::abs(h.y - (m * h.x + k)) < 1.0) kept.push_back(h);
+  if (kept.size() >= 10) fit_line(kept, m, k);
+
+  // 3. The shelf end: along a band just below the shelf top, the strongest dark-left / bright-right step.
+  const double x_guess = run.back().x;
+  double best = 0;
+  int best_x = -1;
+  std::vector<double> profile(light.cols, 0.0);
+  for (int x = 2; x < light.cols - 2; ++x) {
+    double sum = 0;
+    int n = 0;
+    for (int d = 3; d <= 15; ++d) {
+      const int y = static_cast<int>(std::lround(m * x + k)) + d;
+      if (!valid(x - 5, y) || !valid(x + 5, y) || !valid(x, y + 4)) break;  // a thinner band near the frame bottom
+      sum += at(x, y);
+      ++n;
+    }
+    if (n < 3) n = 0;
+    profile[x] = n > 0 ? sum / n : -1;
+  }
+  for (int x = std::max(4, static_cast<int>(x_guess) - 15); x <= std::min(light.cols - 5, static_cast<int>(x_guess) + 15); ++x) {
+    if (profile[x - 3] < 0 || profile[x + 3] < 0) continue;
+    const double rise = (profile[x + 3] - profile[x - 3]) / std::max(1e-3, profile[x + 3]);
+    if (rise > best) {
+      best = rise;
+      best_x = x;
+    }
+  }
+  if (best < 0.15 || best_x < 0) {
+    out.message = "shelf end not seen";
+    return out;
+  }
+  auto rise_at = [&](int x) { return profile[x + 2] - profile[x - 2]; };
+  const double a = rise_at(best_x - 1), b = rise_at(best_x), c = rise_at(best_x + 1);
+  const double den = a - 2 * b + c;
+  const double dx = std::abs(den) > 1e-9 ? std::clamp(0.5 * (a - c) / den, -0.5, 0.5) : 0.0;
+  const double edge = best_x + dx;
+  out.found = true;
+  out.corner = cv::Point2d(edge, m * edge + k);
+  out.angle_rad = std::atan(m);
+  out.columns = static_cast<int>(kept.size());
+  out.message = "shelf corner at (" + fmt(out.corner.x, 1) + ", " + fmt(out.corner.y, 1) + ") rectified px, tilt " +
+                fmt(out.angle_rad * 180 / M_PI, 2) + " degrees";
+  return out;
 }
 
 bricklayer::command_t self_check_command() { return show(bricklayer::command_t::PATTERN_MARKERS, kMarkerSetSelfCheck, 0, 0, 0); }

@@ -11,10 +11,13 @@
 //   with one plane only the product of focal length and k1 is observable, and any consistent pair
 //   undistorts identically). Residuals are in camera pixels, where the detection noise lives;
 //   correspondences more than 3 px off after the first fit are dropped and the fit repeated.
-// - Board frame: the projector image defines the rectified board frame (rectified pixel =
-//   projector pixel x camera_width / projector_width, the default setup of common/board.h), and
-//   the BoardGeometry (--board FILE or defaults) places the surface edge, surface top and block
-//   size in it.
+// - Board frame: the projector image defines a rectified frame (rectified pixel = projector pixel
+//   x camera_width / projector_width, the default setup of common/board.h) in which the
+//   BoardGeometry (--board FILE or defaults) gives the block size. The shelf's top edge and its end
+//   are found in the projector's light (colour frames minus black: no shadows, no ambient), and
+//   the frame is rotated and shifted so that the shelf top is horizontal and its corner lands on the
+//   geometry's (edge_x_px, surface_y_px). Scale cannot be seen on an empty board: it is the
+//   projector's.
 // - Colour: projector black, red, green and blue at a known drive level; the median camera BGR
 //   over the central part of the frame, black subtracted, divided by the drive.
 #pragma once
@@ -37,6 +40,9 @@ struct CalibrationOptions {
   double max_error_px = 1.0;    // mean reprojection error (projector pixels) above which a calibration is rejected
   int colour_drive = 80;        // projector level (0..255) of the red/green/blue frames; low enough not to saturate
   int min_correspondences = 30; // fewer detected markers: rejected
+  // Find the shelf (the stacking surface, darker than the glass) and take the surface edge, the
+  // surface top and the rotation of the board frame from it; block sizes stay from `board`.
+  bool board_from_shelf = true;
 };
 
 // One pattern to show and what the operator is told about it.
@@ -83,6 +89,16 @@ struct ColourMeasurement {
 ColourMeasurement measure_colour_mixing(const cv::Mat& black, const cv::Mat& blue, const cv::Mat& green,
                                         const cv::Mat& red, int drive);
 
+// The shelf corner in a rectified image of the projector's light (CV_32F, negative = unseen).
+struct ShelfCorner {
+  bool found = false;
+  cv::Point2d corner;      // rectified pixels: the shelf's top right corner (surface edge, surface top)
+  double angle_rad = 0.0;  // slope of the shelf top (positive: falls to the right in image rows)
+  int columns = 0;         // columns that saw the shelf top
+  std::string message;
+};
+ShelfCorner find_shelf_corner(const cv::Mat& light_rectified, const BoardGeometry& nominal);
+
 enum class CalibrationStatus { kOk, kBadFrames, kTooFewPoints, kSaturated, kErrorTooHigh, kInvalid };
 const char* to_string(CalibrationStatus status);
 
@@ -92,6 +108,7 @@ struct CalibrationResult {
   bricklayer::calibration_t calibration{};  // filled whenever the fit ran (even when rejected)
   int correspondences = 0;
   int inliers = 0;
+  ShelfCorner shelf;  // what the board frame was anchored on (found = false: the --board geometry as is)
 };
 
 // frames: one camera frame (CV_8UC3) per step of calibration_steps(options), in order.
