@@ -1,6 +1,7 @@
 #include "bricklayer/launcher/supervisor.h"
 
 #include <signal.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -93,6 +94,9 @@ Supervisor::Supervisor(Profile profile, SupervisorOptions options)
     for (const auto& line : missing) msg += "\n  " + line;
     throw ProfileError(msg);
   }
+  char host[256] = {0};
+  gethostname(host, sizeof(host) - 1);
+  host_ = host;
   module_ = std::make_unique<Module>("launcher", options_.lcm_url);
   module_->subscribe<heartbeat_t>(channel(kHeartbeatChannel), [this](const heartbeat_t& hb) { HandleHeartbeat(hb); });
 }
@@ -139,6 +143,8 @@ void Supervisor::HandleHeartbeat(const heartbeat_t& hb) {
     if (m.spec.heartbeat.empty() || m.spec.heartbeat != hb.module || !m.proc.started() || m.proc.pid() != hb.pid)
       continue;
     if (m.state != State::kStarting && m.state != State::kUp) continue;
+    // Another host's module with the same name and, by chance, the same pid is not ours.
+    if (!hb.instance.empty() && hb.instance != host_ + ":" + std::to_string(hb.pid)) continue;
     auto now = Clock::now();
     m.last_beat = now;
     m.last = hb;

@@ -74,6 +74,7 @@ class Supervisor {
   bool all_up_announced_ = false;
   bool fatal_ = false;
   std::string log_file_;
+  std::string host_;  // this machine's name, as in heartbeat_t.instance ("host:pid")
   Clock::time_point t0_;
 };
 
