@@ -30,8 +30,9 @@ namespace cal = calibration;
 namespace sim = simcam;
 
 struct Stats {
-  std::vector<double> mean, max, ms, colour;
+  std::vector<double> mean, max, ms, colour, origin, level, shelf_found;
 };
+
 
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0;
@@ -164,6 +165,16 @@ int Main(int argc, char** argv) {
       double worst = 0;
       for (int i = 0; i < 9; ++i) worst = std::max(worst, std::abs(m.val[i] - projector.mixing.val[i]) / scale);
       corners.colour.push_back(100 * worst);
+      // Board frame: where the true origin (surface edge, surface top) lands, and how level the surface is.
+      auto at = [&](double bx, double by) {
+        const cv::Point2d r(camera.board.to_px_x(bx), camera.board.to_px_y(by));
+        return cal::camera_to_board(result.calibration, sim::rectified_to_camera(camera, r));
+      };
+      corners.shelf_found.push_back(result.shelf.found ? 1 : 0);
+      corners.origin.push_back(cv::norm(at(0, 0)));
+      double level = 0;
+      for (double bx = -4; bx <= 4; bx += 1) level = std::max(level, std::abs(at(bx, 0).y));
+      corners.level.push_back(level);
     }
 
     // Centres only: the same detections without the corners.
@@ -196,6 +207,13 @@ int Main(int argc, char** argv) {
   if (!corners.colour.empty()) {
     std::printf("colour mixing: worst entry error median %.2f%% p99 %.2f%% of the largest diagonal entry\n",
                 percentile(corners.colour, 0.5), percentile(corners.colour, 0.99));
+  }
+  if (!corners.origin.empty()) {
+    int found = 0;
+    for (double f : corners.shelf_found) found += f > 0;
+    std::printf("board frame: shelf found in %d of %zu; origin error median %.4f p99 %.4f, surface level within median %.4f p99 %.4f block lengths\n",
+                found, corners.shelf_found.size(), percentile(corners.origin, 0.5), percentile(corners.origin, 0.99),
+                percentile(corners.level, 0.5), percentile(corners.level, 0.99));
   }
   report("markers, centres only", centres, "fit");
   report("Gray code, dense (bits >= 2)", gray, "fit");
