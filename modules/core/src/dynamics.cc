@@ -89,7 +89,20 @@ Accelerations by_nnls(const ContactGraph& g, const ContactRows& c) {
   A.makeCompressed();
   Eigen::VectorXd b = Eigen::VectorXd::Zero(c.num_vars);
   for (int v = 0; v < c.num_vars; v += 2) b(v) = 1.0;
-  const NnlsResult nnls = solve_nnls(A, b);
+  // Warm start: the two extreme support ends of every free block, top row first (see two_point_certificate).
+  std::vector<int> column_of(2 * g.contacts.size(), -1);
+  for (int k = 0; k < m; ++k) column_of[static_cast<size_t>(c.contact_end[static_cast<size_t>(k)])] = k;
+  std::vector<int> initial;
+  initial.reserve(static_cast<size_t>(c.num_vars));
+  for (int row = g.num_rows() - 1; row >= 0; --row) {
+    for (int i : g.rows[static_cast<size_t>(row)]) {
+      const auto& sup = g.supports[static_cast<size_t>(i)];
+      if (c.var[static_cast<size_t>(i)] < 0 || sup.empty()) continue;
+      initial.push_back(column_of[2 * static_cast<size_t>(sup.front())]);
+      initial.push_back(column_of[2 * static_cast<size_t>(sup.back()) + 1]);
+    }
+  }
+  const NnlsResult nnls = solve_nnls(A, b, 0, initial);
   // z = z0 + M^-1 J^T lambda = M^-1/2 (A lambda - b)
   const Eigen::VectorXd r = A * nnls.x - b;
   Accelerations out;
@@ -144,8 +157,54 @@ Accelerations by_nlopt(const ContactGraph& g, const ContactRows& c) {
 
 }  // namespace
 
+bool two_point_certificate(const ContactGraph& g, const std::vector<char>& free, std::vector<double>* forces) {
+  std::vector<double> local;
+  std::vector<double>& f = forces ? *forces : local;
+  f.assign(2 * g.contacts.size(), 0.0);
+  auto is_free = [&](int i) { return free.empty() || free[static_cast<size_t>(i)] != 0; };
+  for (int r = g.num_rows() - 1; r >= 0; --r) {
+    for (int i : g.rows[static_cast<size_t>(r)]) {
+      if (!is_free(i)) continue;
+      const double c = g.centre(i);
+      double load = 1.0;  // own weight
+      double moment = 0.0;
+      for (int k : g.carries[static_cast<size_t>(i)]) {
+        const Contact& ct = g.contacts[static_cast<size_t>(k)];
+        if (!is_free(ct.upper)) continue;
+        const double fl = f[2 * static_cast<size_t>(k)];
+        const double fr = f[2 * static_cast<size_t>(k) + 1];
+        load += fl + fr;
+        moment += fl * (ct.left - c) + fr * (ct.right - c);
+      }
+      const auto& sup = g.supports[static_cast<size_t>(i)];
+      if (sup.empty()) return false;
+      const int kl = sup.front();
+      const int kr = sup.back();
+      const double dl = g.contacts[static_cast<size_t>(kl)].left - c;
+      const double dr = g.contacts[static_cast<size_t>(kr)].right - c;
+      if (!(dr - dl > kContactTolerance)) return false;
+      const double right = (moment - load * dl) / (dr - dl);
+      const double left = load - right;
+      const double tol = -1e-9 * load;
+      if (right < tol || left < tol) return false;
+      f[2 * static_cast<size_t>(kl)] = std::max(0.0, left);
+      f[2 * static_cast<size_t>(kr) + 1] = std::max(0.0, right);
+    }
+  }
+  return true;
+}
+
 Accelerations initial_accelerations(const ContactGraph& graph, const std::vector<char>& free, QpMethod method) {
   if (!free.empty() && free.size() != graph.size()) throw std::invalid_argument("free: one flag per block expected");
+  {
+    Accelerations rest;
+    if (two_point_certificate(graph, free, &rest.force)) {
+      rest.a.assign(graph.size(), 0.0);
+      rest.alpha.assign(graph.size(), 0.0);
+      rest.certified = true;
+      return rest;
+    }
+  }
   const ContactRows rows = contact_rows(graph, free);
   if (rows.num_vars == 0) {
     Accelerations none;

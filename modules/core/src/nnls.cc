@@ -13,7 +13,8 @@ namespace {
 template <class Ops>
 class PassiveCholesky {
  public:
-  PassiveCholesky(const Ops& ops, int n) : ops_(ops), l_(n, n) {}
+  // capacity: the largest possible passive set (rank of A <= its number of rows).
+  PassiveCholesky(const Ops& ops, int capacity) : ops_(ops), l_(capacity, capacity) {}
 
   const std::vector<int>& indices() const { return passive_; }
   int size() const { return static_cast<int>(passive_.size()); }
@@ -21,11 +22,19 @@ class PassiveCholesky {
   // Appends index j; false (and nothing changes) when its column is numerically dependent on the passive ones.
   bool add(int j) {
     const int p = size();
+    if (p >= l_.rows()) return false;  // more columns than rows: j is necessarily dependent
     const double gjj = ops_.gram(j, j);
     if (!(gjj > 0.0)) return false;
     Eigen::VectorXd col(p);
-    for (int k = 0; k < p; ++k) col(k) = ops_.gram(passive_[static_cast<size_t>(k)], j);
-    if (p > 0) l_.topLeftCorner(p, p).triangularView<Eigen::Lower>().solveInPlace(col);
+    int first = p;  // entries before the first nonzero of G_Pj stay zero in L^-1 G_Pj
+    for (int k = 0; k < p; ++k) {
+      col(k) = ops_.gram(passive_[static_cast<size_t>(k)], j);
+      if (col(k) != 0.0 && first == p) first = k;
+    }
+    if (first < p) {
+      const int tail = p - first;
+      l_.block(first, first, tail, tail).triangularView<Eigen::Lower>().solveInPlace(col.tail(tail));
+    }
     const double d = gjj - col.squaredNorm();
     if (!(d > 1e-12 * gjj)) return false;
     l_.block(p, 0, 1, p) = col.transpose();
@@ -75,7 +84,7 @@ class PassiveCholesky {
 
 // Ops: gram(i, j) = (A^T A)_ij, gradient(x) = A^T (b - A x), atb() = A^T b, max_gram_diagonal().
 template <class Ops>
-NnlsResult lawson_hanson(const Ops& ops, int max_iterations) {
+NnlsResult lawson_hanson(const Ops& ops, int max_iterations, const std::vector<int>& initial) {
   const Eigen::VectorXd& atb = ops.atb();
   const int n = static_cast<int>(atb.size());
   NnlsResult result;
@@ -88,11 +97,36 @@ NnlsResult lawson_hanson(const Ops& ops, int max_iterations) {
   const double scale = std::max(1.0, atb.cwiseAbs().maxCoeff()) * std::max(1.0, ops.max_gram_diagonal());
   const double tol = 1e-11 * scale;
 
-  PassiveCholesky<Ops> chol(ops, n);
+  PassiveCholesky<Ops> chol(ops, std::min(n, ops.rank_bound()));
   std::vector<char> in_passive(static_cast<size_t>(n), 0);
   std::vector<char> rejected(static_cast<size_t>(n), 0);
   Eigen::VectorXd& x = result.x;
   Eigen::VectorXd w = atb;  // gradient of -1/2||Ax-b||^2 at x = 0
+
+  // Warm start: take the initial passive set (dependent columns skipped) and drop every index whose
+  // least-squares value is not positive until all are (LH's inner loop from x = 0, where every step
+  // length is 0). The invariants of the main loop then hold: x >= 0, x_P solves the passive problem.
+  if (!initial.empty()) {
+    for (int j : initial) {
+      if (j >= 0 && j < n && !in_passive[static_cast<size_t>(j)] && chol.add(j)) in_passive[static_cast<size_t>(j)] = 1;
+    }
+    while (chol.size() > 0) {
+      const Eigen::VectorXd s = chol.solve(atb);
+      bool removed = false;
+      for (int k = chol.size() - 1; k >= 0; --k) {
+        if (s(k) <= 0.0) {
+          in_passive[static_cast<size_t>(chol.indices()[static_cast<size_t>(k)])] = 0;
+          chol.remove_at(k);
+          removed = true;
+        }
+      }
+      if (!removed) {
+        for (int k = 0; k < chol.size(); ++k) x(chol.indices()[static_cast<size_t>(k)]) = s(k);
+        break;
+      }
+    }
+    w = ops.gradient(x);
+  }
 
   while (result.iterations < max_iterations) {
     int best = -1;
@@ -176,6 +210,7 @@ struct DenseOps {
   const Eigen::VectorXd& atb() const { return ab; }
   Eigen::VectorXd gradient(const Eigen::VectorXd& x) const { return ab - g * x; }
   double max_gram_diagonal() const { return g.diagonal().maxCoeff(); }
+  int rank_bound() const { return static_cast<int>(g.rows()); }
 };
 
 struct SparseOps {
@@ -204,6 +239,7 @@ struct SparseOps {
     const Eigen::VectorXd r = b - a * x;
     return a.transpose() * r;
   }
+  int rank_bound() const { return static_cast<int>(a.rows()); }
   double max_gram_diagonal() const {
     double best = 0.0;
     for (int j = 0; j < a.cols(); ++j) best = std::max(best, a.col(j).squaredNorm());
@@ -214,11 +250,12 @@ struct SparseOps {
 }  // namespace
 
 NnlsResult solve_nnls_normal(const Eigen::MatrixXd& gram, const Eigen::VectorXd& atb, int max_iterations) {
-  return lawson_hanson(DenseOps{gram, atb}, max_iterations);
+  return lawson_hanson(DenseOps{gram, atb}, max_iterations, {});
 }
 
-NnlsResult solve_nnls(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b, int max_iterations) {
-  return lawson_hanson(SparseOps(A, b), max_iterations);
+NnlsResult solve_nnls(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b, int max_iterations,
+                      const std::vector<int>& initial_passive) {
+  return lawson_hanson(SparseOps(A, b), max_iterations, initial_passive);
 }
 
 NnlsResult solve_nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, int max_iterations) {

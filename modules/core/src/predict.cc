@@ -114,13 +114,15 @@ void fill_common(const Stack& stack, Prediction& p) {
 }
 
 void annotate_balance(const ContactGraph& g, const PredictOptions& options, Prediction& p) {
-  p.balanced = balance_violation(g, options.solver) <= kBalanceTolerance;
+  p.balanced = two_point_certificate(g) || balance_violation(g, options.solver) <= kBalanceTolerance;
   if (!p.balanced) {
     for (auto& b : p.blocks) b.state = BlockState::kCause;
   }
 }
 
 void annotate_paper(const ContactGraph& g, const PredictOptions& options, Prediction& p) {
+  p.balanced = true;
+  if (two_point_certificate(g)) return;  // balanced: every fictitious force is zero
   opt::Problem problem;
   std::vector<int> contact_var;
   const std::vector<int> row = add_equilibrium(g, {}, problem, contact_var);
@@ -146,6 +148,7 @@ void annotate_paper(const ContactGraph& g, const PredictOptions& options, Predic
 void annotate_exact(const ContactGraph& g, const PredictOptions& options, Prediction& p) {
   p.balanced = true;
   if (g.size() == 0) return;
+  if (two_point_certificate(g)) return;
   if (options.lp_first && balance_violation(g, options.solver) <= kBalanceTolerance) return;
   p.qp = to_string(options.qp);
   const Accelerations full = initial_accelerations(g, {}, options.qp);

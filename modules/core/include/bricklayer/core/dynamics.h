@@ -27,9 +27,17 @@ struct Accelerations {
   std::vector<double> force;  // contact forces: force[2k] at contacts[k].left, force[2k+1] at .right (NNLS only)
   bool converged = true;
   int iterations = 0;
+  bool certified = false;  // answered by two_point_certificate() without a QP
   bool moving(size_t i) const;
   bool any_moving() const;
 };
+
+// Statics shortcut (O(n)): every free block is assumed to rest on the two extreme ends of its support hull,
+// and the forces are computed row by row from the top. If every force is >= -1e-9 x (the load) this is a
+// proof that the pile is balanced (all initial accelerations are zero). false means "no proof", not
+// "unbalanced". forces (optional): as Accelerations::force.
+bool two_point_certificate(const ContactGraph& graph, const std::vector<char>& free = {},
+                           std::vector<double>* forces = nullptr);
 
 // free: one flag per block; a block whose flag is 0 is held fixed (it acts like the surface). Empty: all free.
 // Throws std::runtime_error when the backend fails.

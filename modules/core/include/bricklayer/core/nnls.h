@@ -7,6 +7,8 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 
+#include <vector>
+
 namespace bricklayer::core {
 
 struct NnlsResult {
@@ -23,6 +25,11 @@ NnlsResult solve_nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, int ma
 NnlsResult solve_nnls_normal(const Eigen::MatrixXd& gram, const Eigen::VectorXd& atb, int max_iterations = 0);
 
 // The same with A sparse (column-major): Gram entries are formed on demand, never the whole A^T A.
-NnlsResult solve_nnls(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b, int max_iterations = 0);
+// initial_passive: a warm start (a guess of the columns with positive x at the optimum). Any guess is safe:
+// dependent columns are skipped and columns with a non-positive least-squares value dropped before the
+// usual iterations; a good guess leaves only a few. Order it so that columns sharing rows of A are close
+// together (the Cholesky update then only touches a band).
+NnlsResult solve_nnls(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b, int max_iterations = 0,
+                      const std::vector<int>& initial_passive = {});
 
 }  // namespace bricklayer::core
