@@ -352,4 +352,13 @@ TEST_CASE("bricklayer-calibrate refuses bad flags and a bad calibration file") {
     CHECK(log.find(c.expect) != std::string::npos);
   }
   std::remove(bad.c_str());
+
+  const std::string written = temp("default.json");
+  const Child child = spawn({program(), "--write-default", "--output", written}, temp("default.err"));
+  int status = 0;
+  waitpid(child.pid, &status, 0);
+  CHECK(WEXITSTATUS(status) == 0);
+  const calibration_t d = cal::load_calibration(written);
+  CHECK(d.projector_width == 1024);
+  std::remove(written.c_str());
 }

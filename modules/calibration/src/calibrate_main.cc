@@ -11,6 +11,7 @@
 //                 publish on BL_CALIBRATION (exit 0).
 //   --self-check  load --output, project the self-check markers once, report the drift (exit 0, or
 //                 3 when it exceeds --drift-threshold).
+//   --write-default  write the uncalibrated default setup to --output and exit.
 //   --serve       load --output, publish it (again every --republish seconds, so late starters catch
 //                 up), and run the self-check on every SELF_CHECK command while the board is empty.
 // For every pattern: send SHOW_PATTERN, wait for projector_state_t echoing its sequence, then use the
@@ -396,6 +397,7 @@ int Main(int argc, char** argv) {
   flags.add_bool("no-shelf", "do not anchor the board frame on the detected shelf; use --board exactly as given");
   flags.add_bool("self-check", "check the saved calibration for drift once and exit (3 = drift above threshold)");
   flags.add_bool("serve", "publish the saved calibration and self-check on command SELF_CHECK when the board is empty");
+  flags.add_bool("write-default", "write the uncalibrated default setup (common/board.h) to --output and exit");
   if (!flags.parse(argc, argv)) return 0;
   log::set_module("calibrate");
   log::set_level(log::parse_level(flags.get("log-level")));
@@ -421,6 +423,12 @@ int Main(int argc, char** argv) {
   options.republish_s = flags.get_double("republish");
   if (options.republish_s <= 0) throw FlagError("--republish must be positive");
   if (flags.get_bool("self-check") && flags.get_bool("serve")) throw FlagError("--self-check and --serve exclude each other");
+
+  if (flags.get_bool("write-default")) {
+    cal::save_calibration(options.output, cal::default_calibration());
+    log::info("wrote the uncalibrated default to ", options.output);
+    return 0;
+  }
 
   const Calibrate::Mode mode = flags.get_bool("serve")        ? Calibrate::Mode::kServe
                                : flags.get_bool("self-check") ? Calibrate::Mode::kSelfCheck

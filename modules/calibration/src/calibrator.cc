@@ -48,7 +48,9 @@ std::string fmt(double v, int precision = 3) {
 }
 
 // The model: projector pixel -> normalised projector (pn) -> homography G -> normalised ideal camera
-// (x) -> radial distortion (k1, k2) -> camera pixel. Parameters: G's first 8 entries (G22 = 1), k1, k2.
+// (x) -> radial distortion (k1, k2) about the distortion centre -> camera pixel. Parameters q:
+// G's first 8 entries (G22 = 1), k1, k2, the distortion centre's offset from the image centre
+// (camera px), and the corner bias (camera px, see FitPoint).
 constexpr int kParams = 13;
 using Params = Eigen::Matrix<double, kParams, 1>;
 
