@@ -151,7 +151,7 @@ Params levenberg_marquardt(const Model& model, Params q, const std::vector<FitPo
 }
 
 cv::Scalar central_median(const cv::Mat& bgr) {
-  const cv::Rect roi(bgr.cols * 3 / 10, bgr.rows * 3 / 10, bgr.cols * 4 / 10, bgr.rows * 3 / 10);
+  const cv::Rect roi(bgr.cols * 4 / 10, bgr.rows * 4 / 10, bgr.cols * 2 / 10, bgr.rows * 2 / 10);
   std::vector<cv::Mat> channels;
   cv::split(bgr(roi), channels);
   cv::Scalar out;
