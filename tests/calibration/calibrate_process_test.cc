@@ -75,8 +75,15 @@ std::string slurp(const std::string& path) {
 // Projector and camera in one: answers SHOW_PATTERN / CLEAR_PATTERN, streams frames.
 class FakeRig {
  public:
-  FakeRig(const sim::CameraSetup& camera, const sim::ProjectorSetup& projector, bool answer_projector = true)
+  // answer_projector: play the projector too (echo commands). follow_projector: light the scene with
+  // what a real bricklayer-projection reports on BL_PROJECTOR instead (closed loop, as simcam does).
+  FakeRig(const sim::CameraSetup& camera, const sim::ProjectorSetup& projector, bool answer_projector = true,
+          bool follow_projector = false)
       : module_("fakerig", kUrl), renderer_(camera, projector), answer_projector_(answer_projector) {
+    if (follow_projector) {
+      answer_projector_ = false;
+      module_.subscribe<projector_state_t>(channel(kProjectorChannel), [this](const projector_state_t& s) { on_projector(s); });
+    }
     nuisance_ = sim::Nuisance::level(1);
     nuisance_.layout_seed = 11;
     nuisance_.jpeg_quality = 0;  // the bus encoding below is the JPEG round trip
@@ -160,7 +167,16 @@ class FakeRig {
   int patterns_shown = 0;
 
  private:
+  void on_projector(const projector_state_t& s) {
+    cv::Mat image = cv::imdecode(s.image.data, cv::IMREAD_COLOR);
+    if (image.empty()) return;
+    shown_ = image;
+    if (s.mode == projector_state_t::MODE_PATTERN) ++patterns_shown;
+    render_frame();
+  }
+
   void on_command(const command_t& c) {
+    if (!answer_projector_) return;
     if (c.command == command_t::SHOW_PATTERN) {
       shown_ = cal::render_pattern(c, renderer_.projector().size);
       ++patterns_shown;
@@ -362,3 +378,31 @@ TEST_CASE("bricklayer-calibrate refuses bad flags and a bad calibration file") {
   CHECK(d.projector_width == 1024);
   std::remove(written.c_str());
 }
+
+#ifdef BRICKLAYER_HAVE_PROJECTION
+TEST_CASE("bricklayer-calibrate with the real bricklayer-projection (headless) and a closed-loop camera") {
+  const uint64_t seed = 9;
+  const sim::CameraSetup camera = sim::CameraSetup::random(seed);
+  const sim::ProjectorSetup projector = sim::ProjectorSetup::random(seed);
+  const std::string output = temp("with-projection.json");
+  std::remove(output.c_str());
+  FakeRig rig(camera, projector, /*answer_projector=*/false, /*follow_projector=*/true);
+  ::setenv("SDL_AUDIODRIVER", "dummy", 1);
+  const Child projection = spawn({std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-projection", "--lcm-url", kUrl,
+                                  "--headless", "--mute"},
+                                 temp("projection.err"));
+  const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--timeout", "5"}, temp("calibrate.err"));
+  const int code = rig.run_until_exit(child, 60);
+  kill(projection.pid, SIGTERM);
+  int status = 0;
+  waitpid(projection.pid, &status, 0);
+  INFO("calibrate:\n" << slurp(child.stderr_path) << "projection:\n" << slurp(projection.stderr_path));
+  REQUIRE(code == 0);
+  CHECK(rig.patterns_shown >= 6);
+  const calibration_t saved = cal::load_calibration(output);
+  const double worst = max_mapping_error(saved, camera, projector);
+  INFO("max mapping error " << worst);
+  CHECK(worst < 1.5);
+  std::remove(output.c_str());
+}
+#endif
