@@ -313,6 +313,23 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
     CHECK(WEXITSTATUS(status) == 0);
   }
   {
+    // --serve --self-check-every: checks by itself once the board has stayed empty.
+    FakeRig rig(camera, projector);
+    const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--serve", "--self-check-every", "60",
+                               "--empty-for", "0.5"},
+                              temp("auto.err"));
+    rig.run_until([&] { return rig.published.has_value(); }, 10);
+    rig.publish_stack(0);
+    const bool measured = rig.run_until([&] { return rig.heartbeat_value("drift_px").has_value(); }, 10);
+    kill(child.pid, SIGTERM);
+    int status = 0;
+    waitpid(child.pid, &status, 0);
+    INFO(slurp(child.stderr_path));
+    CHECK(measured);
+    CHECK(rig.patterns_shown == 1);
+    CHECK(rig.heartbeat_value("drift_px").value_or(99) < 1.0);
+  }
+  {
     sim::CameraSetup moved = camera;
     moved.rectified_to_camera = cv::Matx33d(1, 0, 5, 0, 1, -3, 0, 0, 1) * camera.rectified_to_camera;
     FakeRig rig(moved, projector);

@@ -13,7 +13,8 @@
 //                 3 when it exceeds --drift-threshold).
 //   --write-default  write the uncalibrated default setup to --output and exit.
 //   --serve       load --output, publish it (again every --republish seconds, so late starters catch
-//                 up), and run the self-check on every SELF_CHECK command while the board is empty.
+//                 up), and run the self-check on every SELF_CHECK command while the board is empty
+//                 (and every --self-check-every seconds once the board has been empty --empty-for seconds).
 // For every pattern: send SHOW_PATTERN, wait for projector_state_t echoing its sequence, then use the
 // camera frame received --skip-frames frames after the echo (frames already in flight show the
 // previous pattern). A step without echo or frame within --timeout seconds is sent once more, then
@@ -102,6 +103,8 @@ struct Options {
   int skip_frames = 3;
   double drift_threshold_px = 2.0;
   double republish_s = 5.0;
+  double self_check_every_s = 0.0;  // --serve: automatic self-check period (0 = only on command)
+  double empty_for_s = 5.0;         // the board must have been empty this long for an automatic check
 };
 
 // Shows a list of patterns one at a time and collects one camera frame per pattern.
@@ -248,7 +251,9 @@ class Calibrate {
     if (capture_) capture_->on_frame(m);
   }
   void HandleStack(const stack_t& s) {
-    board_empty_ = s.status == stack_t::STATUS_OK && s.num_blocks == 0;
+    const bool empty = s.status == stack_t::STATUS_OK && s.num_blocks == 0;
+    if (empty && !board_empty_) empty_since_s_ = monotonic_s();
+    board_empty_ = empty;
   }
   void HandleCommand(const command_t& c) {
     if (c.command != command_t::SELF_CHECK || mode_ != Mode::kServe) return;
@@ -265,6 +270,7 @@ class Calibrate {
   }
 
   void start_self_check() {
+    last_check_s_ = monotonic_s();
     log::info("self-check: projecting ", cal::kMarkerSetSelfCheck == 2 ? "five" : "the", " check markers");
     capture_ = std::make_unique<PatternCapture>(
         module_, std::vector<cal::CalibrationStep>{{cal::self_check_command(), "self-check markers"}}, options_);
@@ -288,6 +294,11 @@ class Calibrate {
   void Tick() {
     const double now = monotonic_s();
     if (mode_ == Mode::kServe && calibration_ && now - last_publish_s_ >= options_.republish_s) publish_calibration();
+    if (mode_ == Mode::kServe && !capture_ && options_.self_check_every_s > 0 && board_empty_ &&
+        now - empty_since_s_ >= options_.empty_for_s && now - last_check_s_ >= options_.self_check_every_s) {
+      log::info("automatic self-check (board empty for ", options_.empty_for_s, " s)");
+      start_self_check();
+    }
     if (!capture_) return;
     capture_->tick(now);
     if (capture_->failed()) {
@@ -375,6 +386,8 @@ class Calibrate {
   std::unique_ptr<PatternCapture> capture_;
   std::optional<calibration_t> calibration_;
   bool board_empty_ = false;
+  double empty_since_s_ = 0;
+  double last_check_s_ = -1e9;
   double last_publish_s_ = -1e9;
   int exit_code_ = 0;
 };
@@ -397,6 +410,8 @@ int Main(int argc, char** argv) {
   flags.add_bool("no-shelf", "do not anchor the board frame on the detected shelf; use --board exactly as given");
   flags.add_bool("self-check", "check the saved calibration for drift once and exit (3 = drift above threshold)");
   flags.add_bool("serve", "publish the saved calibration and self-check on command SELF_CHECK when the board is empty");
+  flags.add("self-check-every", "0", "--serve: also self-check automatically this often, seconds, once the board has been empty --empty-for seconds (0 = only on command)");
+  flags.add("empty-for", "5", "--serve: seconds of empty board before an automatic self-check");
   flags.add_bool("write-default", "write the uncalibrated default setup (common/board.h) to --output and exit");
   if (!flags.parse(argc, argv)) return 0;
   log::set_module("calibrate");
@@ -422,6 +437,10 @@ int Main(int argc, char** argv) {
   if (options.drift_threshold_px <= 0) throw FlagError("--drift-threshold must be positive");
   options.republish_s = flags.get_double("republish");
   if (options.republish_s <= 0) throw FlagError("--republish must be positive");
+  options.self_check_every_s = flags.get_double("self-check-every");
+  if (options.self_check_every_s < 0) throw FlagError("--self-check-every must be 0 (off) or positive seconds");
+  options.empty_for_s = flags.get_double("empty-for");
+  if (options.empty_for_s < 0) throw FlagError("--empty-for must not be negative");
   if (flags.get_bool("self-check") && flags.get_bool("serve")) throw FlagError("--self-check and --serve exclude each other");
 
   if (flags.get_bool("write-default")) {
