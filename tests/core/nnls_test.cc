@@ -1,6 +1,7 @@
 // Lawson-Hanson NNLS against known answers and against brute force over every active set.
 #include "bricklayer/core/nnls.h"
 
+#include <algorithm>
 #include <random>
 
 #include <catch2/catch.hpp>
@@ -88,4 +89,34 @@ TEST_CASE("NNLS reports non-convergence when the iteration limit is too small") 
   CHECK_FALSE(r.converged);
   CHECK(r.iterations == 2);
   CHECK(r.x.minCoeff() >= 0.0);
+}
+
+TEST_CASE("NNLS warm starts: any initial passive set gives the optimum (sparse, banded updates)") {
+  std::mt19937 rng(777);
+  std::normal_distribution<double> normal;
+  std::uniform_int_distribution<int> pick(0, 1000);
+  for (int trial = 0; trial < 300; ++trial) {
+    const int m = 3 + trial % 6;
+    const int n = 2 + trial % 9;
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, n);
+    for (int j = 0; j < n; ++j) {  // banded sparse columns, like contact rows
+      for (int i = 0; i < m; ++i) {
+        if (std::abs(i - j % m) <= 1) A(i, j) = normal(rng);
+      }
+    }
+    if (trial % 4 == 0 && n >= 3) A.col(2) = A.col(1) * -0.5 + A.col(0);  // dependent
+    Eigen::VectorXd b(m);
+    for (int i = 0; i < m; ++i) b(i) = normal(rng);
+    std::vector<int> initial;
+    for (int j = 0; j < n; ++j) {
+      if (pick(rng) % 2) initial.push_back(j);
+    }
+    std::shuffle(initial.begin(), initial.end(), rng);
+    const Eigen::SparseMatrix<double> S = A.sparseView();
+    const NnlsResult r = solve_nnls(S, b, 0, initial);
+    INFO("trial " << trial);
+    REQUIRE(r.converged);
+    CHECK(r.x.minCoeff() >= 0.0);
+    CHECK((A * r.x - b).squaredNorm() == Approx(brute_force_objective(A, b)).margin(1e-9));
+  }
 }

@@ -9,12 +9,17 @@
 namespace bricklayer::core {
 namespace {
 
-// Cholesky factor L (lower) of gram restricted to an ordered passive set, updated in O(p^2).
+// Cholesky factor L (lower) of gram restricted to an ordered passive set. L is kept banded: row t holds
+// nonzeros only in columns [start_[t], t], and every operation touches only that band, so adding or
+// removing an index costs O(p * band) instead of O(p^2) when neighbouring columns sit close together.
+// Entries outside a row's band may hold stale values and are never read.
 template <class Ops>
 class PassiveCholesky {
  public:
   // capacity: the largest possible passive set (rank of A <= its number of rows).
-  PassiveCholesky(const Ops& ops, int capacity) : ops_(ops), l_(capacity, capacity) {}
+  PassiveCholesky(const Ops& ops, int columns, int capacity)
+      : ops_(ops), l_(capacity, capacity), start_(static_cast<size_t>(capacity), 0),
+        position_(static_cast<size_t>(columns), -1), work_(capacity) {}
 
   const std::vector<int>& indices() const { return passive_; }
   int size() const { return static_cast<int>(passive_.size()); }
@@ -25,20 +30,30 @@ class PassiveCholesky {
     if (p >= l_.rows()) return false;  // more columns than rows: j is necessarily dependent
     const double gjj = ops_.gram(j, j);
     if (!(gjj > 0.0)) return false;
-    Eigen::VectorXd col(p);
-    int first = p;  // entries before the first nonzero of G_Pj stay zero in L^-1 G_Pj
-    for (int k = 0; k < p; ++k) {
-      col(k) = ops_.gram(passive_[static_cast<size_t>(k)], j);
-      if (col(k) != 0.0 && first == p) first = k;
+    // G_Pj is nonzero only for passive columns that share a row of A with j.
+    int first = p;
+    touched_.clear();
+    ops_.for_each_neighbour(j, [&](int other) {
+      const int q = position_[static_cast<size_t>(other)];
+      if (q < 0) return;
+      touched_.push_back(q);
+      first = std::min(first, q);
+    });
+    for (int t = first; t < p; ++t) work_(t) = 0.0;
+    for (int q : touched_) work_(q) = ops_.gram(passive_[static_cast<size_t>(q)], j);
+    // Forward substitution from the first nonzero: entries before it stay zero.
+    for (int t = first; t < p; ++t) {
+      double v = work_(t);
+      for (int k = std::max(start_[static_cast<size_t>(t)], first); k < t; ++k) v -= l_(t, k) * work_(k);
+      work_(t) = v / l_(t, t);
     }
-    if (first < p) {
-      const int tail = p - first;
-      l_.block(first, first, tail, tail).triangularView<Eigen::Lower>().solveInPlace(col.tail(tail));
-    }
-    const double d = gjj - col.squaredNorm();
+    double d = gjj;
+    for (int t = first; t < p; ++t) d -= work_(t) * work_(t);
     if (!(d > 1e-12 * gjj)) return false;
-    l_.block(p, 0, 1, p) = col.transpose();
+    for (int t = first; t < p; ++t) l_(p, t) = work_(t);
     l_(p, p) = std::sqrt(d);
+    start_[static_cast<size_t>(p)] = first;
+    position_[static_cast<size_t>(j)] = p;
     passive_.push_back(j);
     return true;
   }
@@ -46,40 +61,87 @@ class PassiveCholesky {
   // Removes the passive index at position k and restores the triangle with Givens rotations.
   void remove_at(int k) {
     const int p = size();
-    for (int i = k; i < p - 1; ++i) l_.row(i).head(p) = l_.row(i + 1).head(p);
-    for (int i = k; i < p - 1; ++i) {
+    // Shift rows k+1.. up by one (only their bands).
+    for (int t = k + 1; t < p; ++t) {
+      const int s = start_[static_cast<size_t>(t)];
+      for (int c = s; c <= t; ++c) l_(t - 1, c) = l_(t, c);
+      start_[static_cast<size_t>(t - 1)] = s;
+    }
+    // Row r (now k..p-2) has its diagonal one column to the right. Rotations on columns (i, i+1), i = k..p-2,
+    // move it back; a rotation touches only rows whose band reaches column i + 1.
+    const int rows = p - 1;
+    buckets_.assign(static_cast<size_t>(p + 1), {});
+    active_.clear();
+    for (int r = k; r < rows; ++r) {
+      const int s = start_[static_cast<size_t>(r)];
+      if (s <= k + 1) {
+        if (s == k + 1) {  // the band grows by one column to the left
+          l_(r, k) = 0.0;
+          start_[static_cast<size_t>(r)] = k;
+        }
+        active_.push_back(r);
+      } else {
+        buckets_[static_cast<size_t>(s)].push_back(r);
+      }
+    }
+    for (int i = k; i < rows; ++i) {
+      for (int r : buckets_[static_cast<size_t>(i + 1)]) {
+        if (i + 1 > k + 1) {
+          l_(r, i) = 0.0;  // the band grows by one column to the left
+          start_[static_cast<size_t>(r)] = i;
+          active_.push_back(r);
+        }
+      }
       const double a = l_(i, i);
       const double b = l_(i, i + 1);
-      const double r = std::hypot(a, b);
-      if (r == 0.0) continue;
-      const double c = a / r;
-      const double s = b / r;
-      for (int t = i; t < p - 1; ++t) {
-        const double u = l_(t, i);
-        const double v = l_(t, i + 1);
-        l_(t, i) = c * u + s * v;
-        l_(t, i + 1) = -s * u + c * v;
+      const double norm = std::hypot(a, b);
+      if (norm != 0.0) {
+        const double c = a / norm;
+        const double sn = b / norm;
+        for (int r : active_) {
+          if (r < i) continue;
+          const double u = l_(r, i);
+          const double v = l_(r, i + 1);
+          l_(r, i) = c * u + sn * v;
+          l_(r, i + 1) = -sn * u + c * v;
+        }
       }
       l_(i, i + 1) = 0.0;
+      // Rows above the next pivot are finished.
+      active_.erase(std::remove_if(active_.begin(), active_.end(), [&](int r) { return r <= i; }), active_.end());
     }
+    position_[static_cast<size_t>(passive_[static_cast<size_t>(k)])] = -1;
     passive_.erase(passive_.begin() + k);
+    for (int t = k; t < rows; ++t) position_[static_cast<size_t>(passive_[static_cast<size_t>(t)])] = t;
   }
 
-  // Solves gram_PP s = rhs_P.
+  // Solves gram_PP s = rhs_P with two banded triangular solves.
   Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const {
     const int p = size();
-    Eigen::VectorXd s(p);
-    for (int k = 0; k < p; ++k) s(k) = rhs(passive_[static_cast<size_t>(k)]);
-    const auto lower = l_.topLeftCorner(p, p).triangularView<Eigen::Lower>();
-    lower.solveInPlace(s);
-    lower.transpose().solveInPlace(s);
-    return s;
+    Eigen::VectorXd y(p);
+    for (int t = 0; t < p; ++t) {
+      double v = rhs(passive_[static_cast<size_t>(t)]);
+      for (int c = start_[static_cast<size_t>(t)]; c < t; ++c) v -= l_(t, c) * y(c);
+      y(t) = v / l_(t, t);
+    }
+    for (int t = p - 1; t >= 0; --t) {
+      y(t) /= l_(t, t);
+      const double st = y(t);
+      for (int c = start_[static_cast<size_t>(t)]; c < t; ++c) y(c) -= l_(t, c) * st;
+    }
+    return y;
   }
 
  private:
   const Ops& ops_;
   Eigen::MatrixXd l_;
+  std::vector<int> start_;     // first nonzero column of each row of L
+  std::vector<int> position_;  // column -> position in passive_, or -1
   std::vector<int> passive_;
+  Eigen::VectorXd work_;
+  std::vector<int> touched_;
+  std::vector<std::vector<int>> buckets_;
+  std::vector<int> active_;
 };
 
 // Ops: gram(i, j) = (A^T A)_ij, gradient(x) = A^T (b - A x), atb() = A^T b, max_gram_diagonal().
@@ -97,7 +159,7 @@ NnlsResult lawson_hanson(const Ops& ops, int max_iterations, const std::vector<i
   const double scale = std::max(1.0, atb.cwiseAbs().maxCoeff()) * std::max(1.0, ops.max_gram_diagonal());
   const double tol = 1e-11 * scale;
 
-  PassiveCholesky<Ops> chol(ops, std::min(n, ops.rank_bound()));
+  PassiveCholesky<Ops> chol(ops, n, std::min(n, ops.rank_bound()));
   std::vector<char> in_passive(static_cast<size_t>(n), 0);
   std::vector<char> rejected(static_cast<size_t>(n), 0);
   Eigen::VectorXd& x = result.x;
@@ -211,13 +273,29 @@ struct DenseOps {
   Eigen::VectorXd gradient(const Eigen::VectorXd& x) const { return ab - g * x; }
   double max_gram_diagonal() const { return g.diagonal().maxCoeff(); }
   int rank_bound() const { return static_cast<int>(g.rows()); }
+  template <class F>
+  void for_each_neighbour(int j, F f) const {
+    for (int o = 0; o < g.rows(); ++o) {
+      if (o != j) f(o);
+    }
+  }
 };
 
 struct SparseOps {
   const Eigen::SparseMatrix<double>& a;  // column-major
   const Eigen::VectorXd& b;
   Eigen::VectorXd ab;
-  SparseOps(const Eigen::SparseMatrix<double>& a_, const Eigen::VectorXd& b_) : a(a_), b(b_), ab(a_.transpose() * b_) {}
+  Eigen::SparseMatrix<double> at;  // A^T, column-major: the columns of A that use each row
+  SparseOps(const Eigen::SparseMatrix<double>& a_, const Eigen::VectorXd& b_)
+      : a(a_), b(b_), ab(a_.transpose() * b_), at(a_.transpose()) {}
+  template <class F>
+  void for_each_neighbour(int j, F f) const {
+    for (Eigen::SparseMatrix<double>::InnerIterator row(a, j); row; ++row) {
+      for (Eigen::SparseMatrix<double>::InnerIterator col(at, static_cast<int>(row.row())); col; ++col) {
+        if (col.row() != j) f(static_cast<int>(col.row()));
+      }
+    }
+  }
   double gram(int i, int j) const {
     Eigen::SparseMatrix<double>::InnerIterator p(a, i), q(a, j);
     double sum = 0.0;

@@ -33,7 +33,10 @@ struct PredictOptions {
   Annotator annotator = Annotator::kExact;
   std::string solver = "clp";  // LP backend: "clp" or "nlopt"
   QpMethod qp = QpMethod::kNnls;  // exact annotator's QP
-  bool lp_first = true;           // exact annotator: answer balanced piles with the LP before any QP
+  // Exact annotator: ask the LP backend whether the pile is balanced before any QP. Off by default: the
+  // O(n) two-point certificate answers most balanced piles and the warm-started NNLS is faster than CLP
+  // for the rest (README "Choices by measurement").
+  bool lp_first = false;
   StackLimits limits;
 };
 
