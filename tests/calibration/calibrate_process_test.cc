@@ -162,6 +162,8 @@ class FakeRig {
     return std::nullopt;
   }
 
+  int corrupt_every = 0;  // > 0: every n-th frame carries garbage instead of a JPEG
+
   std::optional<calibration_t> published;
   std::optional<heartbeat_t> last_heartbeat;
   int patterns_shown = 0;
@@ -212,6 +214,9 @@ class FakeRig {
     img.format = image_t::FORMAT_JPEG;
     img.source = "fakerig";
     img.data = jpeg_;
+    if (corrupt_every > 0 && img.frame_number % corrupt_every == 0) {
+      img.data.assign(img.data.size() / 2, 0x5A);  // not a JPEG
+    }
     img.size = static_cast<int32_t>(img.data.size());
     module_.publish(channel(kImageChannel), img);
   }
@@ -252,6 +257,7 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
 
   {
     FakeRig rig(camera, projector);
+    rig.corrupt_every = 3;  // undecodable frames are counted errors; calibration waits for the next one
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--timeout", "3"}, temp("calibrate.err"));
     const int code = rig.run_until_exit(child);
     const std::string log = slurp(child.stderr_path);
@@ -260,6 +266,7 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
     CHECK(rig.patterns_shown == 6);
     CHECK(log.find("step 6 of 6") != std::string::npos);
     CHECK(log.find("calibration ok") != std::string::npos);
+    CHECK(log.find("could not be decoded") != std::string::npos);
     REQUIRE(rig.published.has_value());
     const calibration_t saved = cal::load_calibration(output);
     CHECK(saved.utime == rig.published->utime);
