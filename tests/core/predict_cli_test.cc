@@ -53,7 +53,7 @@ TEST_CASE("cli: one stack from stdin, exit 0 whatever the verdict") {
   CHECK(j["moving"] == nlohmann::json::array({2, 3}));
   CHECK(j["score"] == 40);
   CHECK(j["annotator"] == "exact");
-  CHECK(j["solver"] == "clp");
+  CHECK(j["solver"] == "nnls");  // the exact annotator's QP; no LP by default
   const Run b = predict_cli("--annotator paper --solver nlopt -", kBalanced);
   REQUIRE(b.status == 0);
   CHECK(nlohmann::json::parse(b.out)["balanced"] == true);

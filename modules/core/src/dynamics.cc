@@ -194,9 +194,10 @@ bool two_point_certificate(const ContactGraph& g, const std::vector<char>& free,
   return true;
 }
 
-Accelerations initial_accelerations(const ContactGraph& graph, const std::vector<char>& free, QpMethod method) {
+Accelerations initial_accelerations(const ContactGraph& graph, const std::vector<char>& free, QpMethod method,
+                                    bool certificate) {
   if (!free.empty() && free.size() != graph.size()) throw std::invalid_argument("free: one flag per block expected");
-  {
+  if (certificate) {
     Accelerations rest;
     if (two_point_certificate(graph, free, &rest.force)) {
       rest.a.assign(graph.size(), 0.0);

@@ -241,7 +241,10 @@ Prediction predict(const Stack& stack, const PredictOptions& options) {
   switch (options.annotator) {
     case Annotator::kBalance: annotate_balance(graph, options, p); break;
     case Annotator::kPaper: annotate_paper(graph, options, p); break;
-    case Annotator::kExact: annotate_exact(graph, options, p); break;
+    case Annotator::kExact:
+      p.solver = options.lp_first ? options.solver + "+" + to_string(options.qp) : to_string(options.qp);
+      annotate_exact(graph, options, p);
+      break;
   }
   return p;
 }

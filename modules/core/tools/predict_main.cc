@@ -26,10 +26,11 @@ int Main(int argc, char** argv) {
                           "Input: {\"block_length\": 1, \"block_height\": 0.333, \"table_edge\": 0, \"blocks\": "
                           "[{\"id\": 7, \"row\": 0, \"x\": -0.4}, ...]}");
   flags.add("annotator", "exact", "exact | paper | balance");
-  flags.add("solver", "clp", "LP backend: clp | nlopt");
+  flags.add("solver", "clp", "LP backend of the paper and balance annotators (and of --lp-first): clp | nlopt");
   flags.add("qp", "nnls", "exact annotator's QP: nnls | nlopt");
   flags.add("max-blocks", "2000", "reject stacks with more blocks than this");
   flags.add_bool("jsonl", "one stack per input line, one result per output line");
+  flags.add_bool("lp-first", "exact annotator: ask the LP backend (--solver) whether the pile is balanced before the QP");
   flags.add_positional("FILE", "stack file, or - for stdin");
   if (!flags.parse(argc, argv)) return 0;
 
@@ -41,6 +42,7 @@ int Main(int argc, char** argv) {
     throw bricklayer::FlagError(e.what());
   }
   options.solver = flags.get("solver");
+  options.lp_first = flags.get_bool("lp-first");
   if (options.solver != "clp" && options.solver != "nlopt") {
     throw bricklayer::FlagError("--solver: unknown solver \"" + options.solver + "\" (expected clp or nlopt)");
   }

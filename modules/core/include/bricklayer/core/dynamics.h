@@ -41,7 +41,8 @@ bool two_point_certificate(const ContactGraph& graph, const std::vector<char>& f
 
 // free: one flag per block; a block whose flag is 0 is held fixed (it acts like the surface). Empty: all free.
 // Throws std::runtime_error when the backend fails.
+// certificate: try two_point_certificate() first (off only to measure the QP itself).
 Accelerations initial_accelerations(const ContactGraph& graph, const std::vector<char>& free = {},
-                                    QpMethod method = QpMethod::kNnls);
+                                    QpMethod method = QpMethod::kNnls, bool certificate = true);
 
 }  // namespace bricklayer::core
