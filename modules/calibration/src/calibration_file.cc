@@ -39,7 +39,7 @@ void check_finite(const char* name, const double* values, int count) {
 }
 
 void check_size(const char* name, int32_t value) {
-  if (value < 16 || value > 16384) fail(std::string(name) + " = " + std::to_string(value) + " out of range 16..16384");
+  if (value < 16 || value > 8192) fail(std::string(name) + " = " + std::to_string(value) + " out of range 16..8192");
 }
 
 // A homography must be invertible and keep every point of the camera image on one side of its

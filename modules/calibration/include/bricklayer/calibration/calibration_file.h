@@ -23,7 +23,7 @@ class CalibrationFileError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Throws CalibrationFileError naming the first problem: sizes outside 16..16384, non-finite numbers,
+// Throws CalibrationFileError naming the first problem: sizes outside 16..8192, non-finite numbers,
 // a non-positive focal length, a principal point outside the image, a lens distortion that folds
 // over inside the image, a singular homography or one whose horizon crosses the camera image, a
 // singular or implausible colour mixing matrix, ambient outside 0..255, block height outside
