@@ -44,14 +44,14 @@ class Child {
   pid_t pid_ = 0;
 };
 
-stack_t to_message(const core::Stack& s, int64_t frame) {
-  stack_t m{};
+bricklayer::stack_t to_message(const core::Stack& s, int64_t frame) {
+  bricklayer::stack_t m{};
   m.utime = 1000 + frame;
   m.frame_number = frame;
   m.block_length = s.block_length;
   m.block_height = s.block_height;
   m.table_edge = s.table_edge;
-  m.status = stack_t::STATUS_OK;
+  m.status = bricklayer::stack_t::STATUS_OK;
   for (const auto& b : s.blocks) {
     block_t bt{};
     bt.id = b.id;
@@ -64,7 +64,7 @@ stack_t to_message(const core::Stack& s, int64_t frame) {
   return m;
 }
 
-prediction_t to_message(const core::Prediction& p, const stack_t& s) {
+prediction_t to_message(const core::Prediction& p, const bricklayer::stack_t& s) {
   prediction_t m{};
   m.utime = s.utime;
   m.frame_number = s.frame_number;
@@ -109,8 +109,8 @@ TEST_CASE("the planner answers a hint request and an unbalanced prediction") {
 
   // A balanced pile: a hint to extend it.
   core::Stack balanced;
-  balanced.blocks = {{1, 0, -0.6}, {2, 1, -1.2}, {3, 1, -0.1}};
-  const stack_t first = to_message(balanced, 1);
+  balanced.blocks = {{1, 0, -0.6}, {2, 1, -1.0}, {3, 2, -0.8}};
+  const bricklayer::stack_t first = to_message(balanced, 1);
   bus.publish(channel(kStackChannel), first);
   bus.publish(channel(kPredictionChannel), to_message(core::predict(balanced), first));
   command_t request{};
@@ -129,8 +129,8 @@ TEST_CASE("the planner answers a hint request and an unbalanced prediction") {
 
   // An unbalanced pile: a preview of its collapse, in answer to its prediction.
   core::Stack tipping;
-  tipping.blocks = {{1, 0, -0.5}, {2, 1, -0.5}, {3, 2, 0.2}, {4, 3, 0.2}};
-  const stack_t second = to_message(tipping, 2);
+  tipping.blocks = {{1, 0, -1.5}, {2, 1, -1.5}, {3, 2, -0.6}, {4, 3, -0.6}};
+  const bricklayer::stack_t second = to_message(tipping, 2);
   const core::Prediction verdict = core::predict(tipping);
   REQUIRE_FALSE(verdict.balanced);
   bus.publish(channel(kStackChannel), second);

@@ -25,6 +25,7 @@ struct Problem {
   std::vector<Contact> contacts;
   std::vector<std::pair<int, int>> same_row;  // (left, right) neighbours in one row: x_right - x_left >= 1
   int target = 0;
+  std::vector<double> start;  // starting variables (feasibility phase: stay near these positions)
   int n() const { return static_cast<int>(rows.size()); }
   int num_vars() const { return n() + 2 * static_cast<int>(contacts.size()); }
   int f_index(size_t c) const { return n() + 2 * static_cast<int>(c); }
@@ -44,6 +45,18 @@ double objective(unsigned nv, const double* v, double* grad, void* data) {
     grad[p->target] = 1.0;
   }
   return v[p->target] + 1.0;
+}
+
+double distance_to_start(unsigned nv, const double* v, double* grad, void* data) {
+  const auto* p = static_cast<const Problem*>(data);
+  if (grad) std::fill(grad, grad + nv, 0.0);
+  double sum = 0.0;
+  for (int i = 0; i < p->n(); ++i) {
+    const double d = v[i] - p->start[i];
+    sum += 0.5 * d * d;
+    if (grad) grad[i] = d;
+  }
+  return sum;
 }
 
 // Equilibrium of every block: force (f from below - f to above - 1 = 0) and moment about x = 0.
@@ -185,33 +198,82 @@ std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& sta
     upper[problem.m_index(c)] = (n + 1.0) * span;
   }
 
-  nlopt::opt opt(nlopt::LD_SLSQP, static_cast<unsigned>(nv));
-  opt.set_lower_bounds(lower);
-  opt.set_upper_bounds(upper);
-  opt.set_max_objective(objective, &problem);
-  opt.add_equality_mconstraint(equalities, &problem, std::vector<double>(2 * n, 1e-12));
-  opt.add_inequality_mconstraint(inequalities, &problem, std::vector<double>(problem.num_inequalities(), 1e-12));
-  opt.set_xtol_rel(1e-12);
-  opt.set_ftol_abs(1e-14);
-  opt.set_maxeval(3000);
-  double value = 0.0;
-  try {
-    opt.optimize(v, value);
-  } catch (const nlopt::roundoff_limited&) {
-    // v holds the last iterate; the residual check below decides.
-  } catch (const std::exception&) {
-    return std::nullopt;
+  // Start forces: each block's load (own weight + what rests on it) shared among its supports in proportion to
+  // the overlap, acting at the overlap's middle. Force equilibrium and the interval constraints then hold at
+  // the start; only moments are off, which SLSQP repairs far more reliably than from zero forces.
+  {
+    std::vector<double> load(n, 1.0);
+    const int top_row = start.back().row;
+    for (int r = top_row; r >= 0; --r)
+      for (int i = 0; i < n; ++i) {
+        if (start[i].row != r) continue;
+        std::vector<std::pair<size_t, double>> below;  // contact, overlap
+        double total = 0.0;
+        for (size_t c = 0; c < problem.contacts.size(); ++c) {
+          const Contact& k = problem.contacts[c];
+          if (k.upper != i) continue;
+          const double lo = k.lower == kTable ? start[i].x : std::max(start[i].x, start[k.lower].x);
+          const double hi = k.lower == kTable ? std::min(start[i].x + 1.0, 0.0) : std::min(start[i].x, start[k.lower].x) + 1.0;
+          if (hi <= lo) continue;
+          below.emplace_back(c, hi - lo);
+          total += hi - lo;
+        }
+        for (const auto& [c, overlap] : below) {
+          const Contact& k = problem.contacts[c];
+          const double f = load[i] * overlap / total;
+          const double lo = k.lower == kTable ? start[i].x : std::max(start[i].x, start[k.lower].x);
+          v[problem.f_index(c)] = f;
+          v[problem.m_index(c)] = f * (lo + 0.5 * overlap);
+          if (k.lower != kTable) load[k.lower] += f;
+        }
+      }
   }
 
-  // NLopt calls infeasible ends a success: measure the residual ourselves.
-  std::vector<double> eq(2 * n), ineq(problem.num_inequalities());
-  equalities(static_cast<unsigned>(eq.size()), eq.data(), nv, v.data(), nullptr, &problem);
-  inequalities(static_cast<unsigned>(ineq.size()), ineq.data(), nv, v.data(), nullptr, &problem);
-  double residual = 0.0;
-  for (double e : eq) residual = std::max(residual, std::abs(e));
-  for (double g : ineq) residual = std::max(residual, g);
-  for (int i = 0; i < nv; ++i) residual = std::max({residual, lower[i] - v[i], v[i] - upper[i]});
+  auto residual_of = [&](const std::vector<double>& w) {
+    std::vector<double> eq(2 * n), ineq(problem.num_inequalities());
+    equalities(static_cast<unsigned>(eq.size()), eq.data(), nv, w.data(), nullptr, &problem);
+    inequalities(static_cast<unsigned>(ineq.size()), ineq.data(), nv, w.data(), nullptr, &problem);
+    double r = 0.0;
+    for (double e : eq) r = std::max(r, std::abs(e));
+    for (double g : ineq) r = std::max(r, g);
+    for (int i = 0; i < nv; ++i) r = std::max({r, lower[i] - w[i], w[i] - upper[i]});
+    return r;
+  };
+  // feasibility: find a balanced layout near the start (min distance of positions to the start) instead of
+  // maximising the overhang.
+  auto run = [&](std::vector<double>& w, bool feasibility) {
+    nlopt::opt opt(nlopt::LD_SLSQP, static_cast<unsigned>(nv));
+    opt.set_lower_bounds(lower);
+    opt.set_upper_bounds(upper);
+    if (feasibility) opt.set_min_objective(distance_to_start, &problem);
+    else opt.set_max_objective(objective, &problem);
+    opt.add_equality_mconstraint(equalities, &problem, std::vector<double>(2 * n, 1e-12));
+    opt.add_inequality_mconstraint(inequalities, &problem, std::vector<double>(problem.num_inequalities(), 1e-12));
+    opt.set_xtol_rel(1e-12);
+    opt.set_ftol_abs(1e-14);
+    opt.set_maxeval(3000);
+    double value = 0.0;
+    try {
+      opt.optimize(w, value);
+    } catch (const std::exception&) {
+      // roundoff_limited or a failed QP subproblem: w holds the last iterate; the residual decides.
+    }
+  };
+  problem.start = v;
+  std::vector<double> w = v;
+  run(w, false);
+  // NLopt calls infeasible ends a success: measure the residual ourselves. Far-from-balanced starts often end
+  // infeasible: then first find a balanced layout near the start, and maximise from there.
+  double residual = residual_of(w);
+  if (!(residual <= tolerance)) {
+    w = v;
+    run(w, true);
+    if (!(residual_of(w) <= 1e-6)) return std::nullopt;
+    run(w, false);
+    residual = residual_of(w);
+  }
   if (!(residual <= tolerance)) return std::nullopt;
+  v = w;
 
   OverhangStack out;
   out.residual = residual;
@@ -257,7 +319,7 @@ std::vector<std::vector<PlacedBlock>> grown(const std::vector<PlacedBlock>& layo
 // Brick-wall seeds with random row profiles (one block on the surface, rows widening then narrowing, rows
 // stepping right up to the principal row and back left above it): large optimal stacks are wide walls with
 // counterweights on top, which growing block by block does not always reach.
-std::vector<std::vector<PlacedBlock>> wall_seeds(int n, int count, std::mt19937_64& rng) {
+std::vector<std::vector<PlacedBlock>> staircase_seeds(int n, int count, std::mt19937_64& rng) {
   std::vector<std::vector<PlacedBlock>> out;
   const int base_rows = std::max(2, static_cast<int>(std::lround(std::sqrt(2.0 * n))));
   for (int k = 0; k < count; ++k) {
@@ -296,6 +358,63 @@ std::vector<std::vector<PlacedBlock>> wall_seeds(int n, int count, std::mt19937_
   }
   return out;
 }
+
+// Walls whose rows grow by at most one block and whose blocks all overlap the row below.
+std::vector<std::vector<PlacedBlock>> supported_wall_seeds(int n, int count, std::mt19937_64& rng) {
+  std::vector<std::vector<PlacedBlock>> out;
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int k = 0; k < count; ++k) {
+    // Row widths: one block on the surface, growing by at most one per row up to a random width.
+    const int widest = 2 + static_cast<int>(rng() % 4);
+    std::vector<int> counts{1};
+    int total = 1;
+    while (total < n) {
+      int c = counts.back();
+      if (c < widest && unit(rng) < 0.7) ++c;
+      c = std::min(c, n - total);
+      counts.push_back(c);
+      total += c;
+    }
+    const int rows = static_cast<int>(counts.size());
+    const int on_top = rows > 3 ? 1 + static_cast<int>(rng() % 2) : (rows > 1 ? 1 : 0);
+    const int principal = rows - 1 - on_top;
+    // Right ends step right up to the principal row and back left above it; every block overlaps the row
+    // below (so the start forces can carry every block).
+    std::vector<PlacedBlock> seed;
+    double right = 0.2 + 0.1 * unit(rng), left = right - 1.0;
+    seed.push_back({0, left});
+    for (int r = 1; r < rows; ++r) {
+      const double prev_right = right, prev_left = left;
+      if (r <= principal) right += counts[r] > counts[r - 1] ? 0.35 + 0.25 * unit(rng) : 0.1 + 0.3 * unit(rng);
+      else right -= 0.4 + 0.4 * unit(rng);
+      right = std::min(right, prev_right + 0.9);
+      right = std::max(right, prev_left - 0.9 + counts[r]);  // leftmost block still overlaps the row below
+      left = right - counts[r];
+      for (int j = 0; j < counts[r]; ++j) seed.push_back({r, left + j});
+    }
+    out.push_back(sorted_blocks(std::move(seed)));
+  }
+  return out;
+}
+
+// Both families, alternating.
+std::vector<std::vector<PlacedBlock>> wall_seeds(int n, int count, std::mt19937_64& rng) {
+  std::vector<std::vector<PlacedBlock>> out;
+  for (int k = 0; k < count; ++k) {
+    auto one = k % 2 == 0 ? staircase_seeds(n, 1, rng) : supported_wall_seeds(n, 1, rng);
+    out.push_back(std::move(one.front()));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::vector<PlacedBlock>> wall_layouts(int n, int count, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  return wall_seeds(n, count, rng);
+}
+
+namespace {
 
 std::string shape_key(const OverhangStack& s) {
   std::string key;
@@ -366,7 +485,14 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
       }
     std::sort(ranked.begin(), ranked.end(),
               [](const OverhangStack& a, const OverhangStack& b) { return a.overhang > b.overhang; });
-    if (ranked.empty()) throw std::runtime_error("search_best_overhang: no feasible stack for n=" + std::to_string(n));
+    if (ranked.empty()) {
+      // Nothing converged: the best of n-1 plus a block lying on the surface far to the left still balances.
+      OverhangStack fallback = best_per_n.back();
+      double left = 0.0;
+      for (const PlacedBlock& b : fallback.blocks) left = std::min(left, b.x);
+      fallback.blocks.insert(fallback.blocks.begin(), PlacedBlock{0, left - 2.0});
+      ranked.push_back(fallback);
+    }
     beam.assign(ranked.begin(), ranked.begin() + std::min<size_t>(ranked.size(), options.beam));
     best_per_n.push_back(beam.front());
     if (progress) progress(n, beam.front());

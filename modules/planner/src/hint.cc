@@ -24,6 +24,7 @@ struct Outcome {
   bool valid = false;
   bool balanced = false;
   int moving = 0;
+  double motion = 0.0;  // sum of a^2 + alpha^2 / 12 over blocks: how hard the pile wants to move
 };
 
 // Everything in normalised units: block length 1, surface edge at 0.
@@ -55,10 +56,14 @@ class Search {
       // The exact annotator's judge of motion (core dynamics), without the per-row cause analysis.
       const core::Accelerations acc = core::initial_accelerations(core::build_contacts(with_blocks(stack_, added)));
       out.balanced = !acc.any_moving();
-      for (size_t i = 0; i < acc.a.size(); ++i) out.moving += acc.moving(i) ? 1 : 0;
+      for (size_t i = 0; i < acc.a.size(); ++i) {
+        out.moving += acc.moving(i) ? 1 : 0;
+        out.motion += acc.a[i] * acc.a[i] + acc.alpha[i] * acc.alpha[i] / 12.0;
+      }
     } catch (const std::runtime_error&) {
       out.balanced = false;
       out.moving = std::numeric_limits<int>::max();
+      out.motion = kInf;
     }
     return out;
   }
@@ -284,7 +289,7 @@ Hint next_block_hint(const core::Stack& stack, const HintOptions& options) {
   }
   struct Single {
     SuggestedBlock block;
-    int moving;
+    double motion;
   };
   std::vector<Single> singles;
   Candidate best;
@@ -293,7 +298,7 @@ Hint next_block_hint(const core::Stack& stack, const HintOptions& options) {
     for (const Interval& range : ranges)
       for (const Interval& f : Search::intersect(free, range)) {
         const auto x = rightmost_safe(search, {{row, 0.0}}, 0, f, m, -kInf, [&](double gx, const Outcome& o) {
-          if (o.valid) singles.push_back({{row, gx}, o.moving});
+          if (o.valid) singles.push_back({{row, gx}, o.motion});
         });
         if (!x) continue;
         const std::vector<SuggestedBlock> blocks{{row, *x}};
@@ -303,8 +308,8 @@ Hint next_block_hint(const core::Stack& stack, const HintOptions& options) {
   }
   if (!best.blocks.empty() || options.max_added < 2) return finish(stack, Hint::Kind::kRebalance, best, options, search);
 
-  // Two blocks: the most helpful single blocks (fewest moving blocks left) as first blocks.
-  std::stable_sort(singles.begin(), singles.end(), [](const Single& a, const Single& b) { return a.moving < b.moving; });
+  // Two blocks: the most helpful single blocks (least motion left) as first blocks.
+  std::stable_sort(singles.begin(), singles.end(), [](const Single& a, const Single& b) { return a.motion < b.motion; });
   std::vector<SuggestedBlock> firsts;
   for (const Single& s : singles) {
     if (static_cast<int>(firsts.size()) >= options.pair_seeds) break;

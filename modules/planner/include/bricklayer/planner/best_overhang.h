@@ -35,6 +35,9 @@ struct OverhangStack {
 std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& start, int target,
                                              double tolerance = 1e-9);
 
+// Seeded brick-wall start layouts of n blocks with random row profiles (used by the search for n >= 8).
+std::vector<std::vector<PlacedBlock>> wall_layouts(int n, int count, uint64_t seed);
+
 struct OverhangSearchOptions {
   int beam = 6;           // layouts kept per n
   int perturbations = 4;  // seeded random restarts around the best layouts per n

@@ -7,7 +7,7 @@
 // right on a grid of step 2m and refined by bisection, so the answer is at least as good as a grid search of
 // step m (see rightmost_safe in hint.cc). Balance checks use the core's initial accelerations (the exact
 // annotator's judge of motion). Rebalancing considers blocks that touch a cause (resting on it or under it);
-// for two blocks, the first is one of the singles that leave the fewest blocks moving.
+// for two blocks, the first is one of the singles that leave the least motion (sum of a^2 + alpha^2/12).
 #pragma once
 
 #include <cstdint>
@@ -20,7 +20,7 @@ namespace bricklayer::planner {
 struct HintOptions {
   double margin = 0.02;  // block lengths
   int max_added = 2;     // rebalancing: at most this many blocks (1 or 2)
-  int pair_seeds = 6;    // rebalancing with two blocks: first blocks tried (the most helpful single ones)
+  int pair_seeds = 6;    // rebalancing with two blocks: first blocks tried (the singles leaving the least motion)
 };
 
 struct SuggestedBlock {
