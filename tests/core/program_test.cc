@@ -153,3 +153,29 @@ TEST_CASE("an iteration limit is reported as limit_reached") {
     CHECK(make_solver(name)->solve(p, options).status == SolveStatus::kLimitReached);
   }
 }
+
+TEST_CASE("a basis hint (good, singular or wrong-sized) never changes the answer") {
+  for (const auto& name : solver_names()) {
+    for (const Known& k : linear_programs()) {
+      if (k.status != SolveStatus::kOptimal) continue;
+      const double tol = name == "clp" ? 1e-9 : 1e-6;
+      for (int variant = 0; variant < 3; ++variant) {
+        Problem p = k.problem;
+        if (variant == 0) {  // one variable per row, in order
+          for (int r = 0; r < p.num_rows(); ++r) p.basis_hint.push_back(r % p.num_variables());
+        } else if (variant == 1) {  // all the same variable: singular
+          p.basis_hint.assign(static_cast<size_t>(p.num_rows()), 0);
+        } else {  // wrong size: ignored
+          p.basis_hint = {0, 0, 0, 0, 0};
+        }
+        INFO(name << ": " << k.name << " variant " << variant);
+        const SolveResult r = make_solver(name)->solve(p);
+        REQUIRE(r.status == SolveStatus::kOptimal);
+        CHECK(r.objective == Approx(k.objective).margin(tol));
+      }
+    }
+  }
+  Problem bad = linear_programs()[0].problem;
+  bad.basis_hint = {0, 7};
+  CHECK(make_solver("clp")->solve(bad).status == SolveStatus::kError);
+}

@@ -1,4 +1,6 @@
 // COIN-OR CLP backend: linear programs only (CLP's quadratic solver is unreliable on these problems).
+#include <cmath>
+
 #include <ClpSimplex.hpp>
 #include <CoinPackedMatrix.hpp>
 
@@ -43,6 +45,20 @@ class ClpSolver final : public Solver {
     ClpSimplex model;
     model.setLogLevel(0);
     model.loadProblem(matrix, lo.data(), hi.data(), problem.cost.data(), rlo.data(), rhi.data());
+    if (static_cast<int>(problem.basis_hint.size()) == m && m > 0) {
+      model.createStatus();
+      for (int i = 0; i < n; ++i) {
+        if (std::isfinite(problem.lower[i])) {
+          model.setColumnStatus(i, ClpSimplex::atLowerBound);
+        } else if (std::isfinite(problem.upper[i])) {
+          model.setColumnStatus(i, ClpSimplex::atUpperBound);
+        } else {
+          model.setColumnStatus(i, ClpSimplex::isFree);
+        }
+      }
+      for (int r = 0; r < m; ++r) model.setRowStatus(r, ClpSimplex::atLowerBound);
+      for (int v : problem.basis_hint) model.setColumnStatus(v, ClpSimplex::basic);
+    }
     model.setPrimalTolerance(options.feasibility_tolerance);
     model.setDualTolerance(1e-9);
     if (options.max_iterations > 0) model.setMaximumIterations(options.max_iterations);

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -44,6 +45,35 @@ std::vector<int> add_equilibrium(const ContactGraph& g, const std::vector<char>&
     }
   }
   return row;
+}
+
+// Warm-start basis: for every free block, the forces at the two extreme ends of its support hull (the
+// two-point statics of two_point_certificate). With zero-cost forces basic, every reduced cost equals the
+// objective coefficient, so the basis is dual feasible and the dual simplex only repairs the few negative
+// forces. fallback(i) gives two variables for a block without a usable hull (or {-1, -1}).
+template <class Fallback>
+std::vector<int> hull_basis(const ContactGraph& g, const std::vector<char>& free, const std::vector<int>& contact_var,
+                            Fallback fallback) {
+  std::vector<int> basis;
+  for (size_t i = 0; i < g.size(); ++i) {
+    if (!is_free(free, i)) continue;
+    const auto& sup = g.supports[i];
+    int left = -1;
+    int right = -1;
+    if (!sup.empty()) {
+      const Contact& cl = g.contacts[static_cast<size_t>(sup.front())];
+      const Contact& cr = g.contacts[static_cast<size_t>(sup.back())];
+      if (cr.right - cl.left > kContactTolerance) {
+        left = contact_var[static_cast<size_t>(sup.front())];
+        right = contact_var[static_cast<size_t>(sup.back())] + 1;
+      }
+    }
+    if (left < 0) std::tie(left, right) = fallback(static_cast<int>(i));
+    if (left < 0 || right < 0) return {};
+    basis.push_back(left);
+    basis.push_back(right);
+  }
+  return basis;
 }
 
 opt::SolveResult solve_lp(const opt::Problem& problem, const std::string& solver, const char* what) {
@@ -135,6 +165,14 @@ void annotate_paper(const ContactGraph& g, const PredictOptions& options, Predic
     problem.set(r, var[k], 1.0);
     problem.set(r + 1, var[k], f.position - g.centre(f.block));
   }
+  problem.basis_hint = hull_basis(g, {}, contact_var, [&](int block) {
+    std::pair<int, int> pair{-1, -1};
+    for (size_t k = 0; k < candidates.size(); ++k) {
+      if (candidates[k].block != block) continue;
+      (pair.first < 0 ? pair.first : pair.second) = var[k];
+    }
+    return pair;
+  });
   const opt::SolveResult result = solve_lp(problem, options.solver, "paper annotator");
   p.balanced = true;
   for (size_t k = 0; k < candidates.size(); ++k) {
@@ -194,10 +232,16 @@ double balance_violation(const ContactGraph& g, const std::string& solver, const
   opt::Problem problem;
   std::vector<int> contact_var;
   const std::vector<int> row = add_equilibrium(g, free, problem, contact_var);
+  std::vector<int> slack(static_cast<size_t>(problem.num_rows()));
   for (int r = 0; r < problem.num_rows(); ++r) {
-    problem.set(r, problem.add_variable(0.0, opt::kInfinity, 1.0), 1.0);
+    slack[static_cast<size_t>(r)] = problem.add_variable(0.0, opt::kInfinity, 1.0);
+    problem.set(r, slack[static_cast<size_t>(r)], 1.0);
     problem.set(r, problem.add_variable(0.0, opt::kInfinity, 1.0), -1.0);
   }
+  problem.basis_hint = hull_basis(g, free, contact_var, [&](int block) {
+    const int r = row[static_cast<size_t>(block)];
+    return std::pair<int, int>{slack[static_cast<size_t>(r)], slack[static_cast<size_t>(r) + 1]};
+  });
   if (problem.num_rows() == 0) return 0.0;
   const opt::SolveResult result = solve_lp(problem, solver, "balance");
   return std::max(0.0, result.objective);

@@ -57,6 +57,12 @@ std::string Problem::check() const {
       return out.str();
     }
   }
+  for (int v : basis_hint) {
+    if (v < 0 || v >= n) {
+      out << "basis hint variable " << v << " out of range";
+      return out.str();
+    }
+  }
   for (const Entry& e : q) {
     if (e.row < 0 || e.row >= n || e.col < 0 || e.col >= n || !std::isfinite(e.value)) {
       out << "quadratic entry (" << e.row << ", " << e.col << ") out of range or not finite";

@@ -31,6 +31,9 @@ struct Problem {
   std::vector<double> row_lower, row_upper;  // one per linear constraint (equal bounds: an equality)
   std::vector<Entry> a;  // constraint matrix entries (duplicates are summed)
   std::vector<Entry> q;  // quadratic objective entries; give both (i,j) and (j,i) for off-diagonal terms
+  // Optional warm start for simplex backends: one variable per row to make basic (the others start at a
+  // bound). Ignored unless it has exactly num_rows() entries; a singular hint is repaired by the backend.
+  std::vector<int> basis_hint;
 
   int num_variables() const { return static_cast<int>(cost.size()); }
   int num_rows() const { return static_cast<int>(row_lower.size()); }
