@@ -415,13 +415,29 @@ TEST_CASE("bricklayer-calibrate with the real bricklayer-projection (headless) a
   const Child projection = spawn({std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-projection", "--lcm-url", kUrl,
                                   "--headless", "--mute"},
                                  temp("projection.err"));
-  const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--timeout", "5"}, temp("calibrate.err"));
+  const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--timeout", "2"}, temp("calibrate.err"));
   const int code = rig.run_until_exit(child, 60);
   kill(projection.pid, SIGTERM);
   int status = 0;
   waitpid(projection.pid, &status, 0);
   INFO("calibrate:\n" << slurp(child.stderr_path) << "projection:\n" << slurp(projection.stderr_path));
   REQUIRE(code == 0);
+  {
+    // A wrong --projector-size is caught from the size of the pattern the projector reports.
+    FakeRig again(camera, projector, false, true);
+    const Child projection2 = spawn({std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-projection", "--lcm-url", kUrl,
+                                     "--headless", "--mute"},
+                                    temp("projection2.err"));
+    const Child wrong = spawn({program(), "--lcm-url", kUrl, "--output", temp("wrong.json"), "--projector-size", "800x600", "--timeout", "2"},
+                              temp("wrong.err"));
+    const int wrong_code = again.run_until_exit(wrong, 30);
+    kill(projection2.pid, SIGTERM);
+    waitpid(projection2.pid, &status, 0);
+    const std::string log = slurp(wrong.stderr_path);
+    INFO(log);
+    CHECK(wrong_code == 1);
+    CHECK(log.find("but --projector-size is 800x600") != std::string::npos);
+  }
   CHECK(rig.patterns_shown >= 6);
   const calibration_t saved = cal::load_calibration(output);
   const double worst = max_mapping_error(saved, camera, projector);

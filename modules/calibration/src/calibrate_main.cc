@@ -120,6 +120,15 @@ class PatternCapture {
 
   void on_projector_state(const projector_state_t& s) {
     if (waiting_ && !echoed_ && s.command_sequence == sequence_) {
+      // Patterns come back at full size: a different size means the marker positions are wrong.
+      const cv::Size expected = options_.calibration.projector_size;
+      if (s.mode == projector_state_t::MODE_PATTERN && s.image.width > 0 &&
+          (s.image.width != expected.width || s.image.height != expected.height)) {
+        failure_ = "the projector shows " + std::to_string(s.image.width) + "x" + std::to_string(s.image.height) +
+                   " but --projector-size is " + std::to_string(expected.width) + "x" + std::to_string(expected.height) +
+                   ": pass the projector's resolution";
+        return;
+      }
       echoed_ = true;
       frames_seen_ = 0;
       log::debug("projector shows sequence ", sequence_);
