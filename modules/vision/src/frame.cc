@@ -222,10 +222,17 @@ calibration_t parse_calibration_json(const std::string& text) {
     }
   };
   c.utime = j.contains("utime") && j["utime"].is_number_integer() ? j["utime"].get<int64_t>() : 0;
-  c.camera_width = static_cast<int32_t>(number("camera_width"));
-  c.camera_height = static_cast<int32_t>(number("camera_height"));
-  c.projector_width = static_cast<int32_t>(number("projector_width"));
-  c.projector_height = static_cast<int32_t>(number("projector_height"));
+  // Range-checked before the cast: converting an out-of-range double to int is undefined behaviour.
+  auto size = [&](const char* key) -> int32_t {
+    const double v = number(key);
+    if (!(v >= 0 && v <= 1 << 20))
+      throw std::runtime_error(std::string("calibration: '") + key + "' out of range 0..1048576");
+    return static_cast<int32_t>(v);
+  };
+  c.camera_width = size("camera_width");
+  c.camera_height = size("camera_height");
+  c.projector_width = size("projector_width");
+  c.projector_height = size("projector_height");
   array("camera_matrix", c.camera_matrix, 4);
   array("distortion", c.distortion, 5);
   array("camera_to_projector", c.camera_to_projector, 9);
