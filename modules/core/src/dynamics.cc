@@ -73,7 +73,7 @@ ContactRows contact_rows(const ContactGraph& g, const std::vector<char>& free) {
   return c;
 }
 
-Accelerations by_nnls(const ContactGraph& g, const ContactRows& c) {
+Accelerations by_nnls(const ContactGraph& g, const ContactRows& c, const std::vector<double>* warm) {
   const double inertia = (1.0 + g.height * g.height) / 12.0;
   const double inv_sqrt_inertia = 1.0 / std::sqrt(inertia);
   // A = M^-1/2 J^T (variables x contact ends), b = -M^1/2 z0 = (1, 0, 1, 0, ...).
@@ -98,6 +98,18 @@ Accelerations by_nnls(const ContactGraph& g, const ContactRows& c) {
     for (int i : g.rows[static_cast<size_t>(row)]) {
       const auto& sup = g.supports[static_cast<size_t>(i)];
       if (c.var[static_cast<size_t>(i)] < 0 || sup.empty()) continue;
+      bool seeded = false;
+      if (warm != nullptr && warm->size() == 2 * g.contacts.size()) {
+        for (int k : sup) {
+          for (size_t end = 0; end < 2; ++end) {
+            if ((*warm)[2 * static_cast<size_t>(k) + end] > 0.0) {
+              initial.push_back(column_of[2 * static_cast<size_t>(k) + end]);
+              seeded = true;
+            }
+          }
+        }
+      }
+      if (seeded) continue;
       initial.push_back(column_of[2 * static_cast<size_t>(sup.front())]);
       initial.push_back(column_of[2 * static_cast<size_t>(sup.back()) + 1]);
     }
@@ -195,7 +207,7 @@ bool two_point_certificate(const ContactGraph& g, const std::vector<char>& free,
 }
 
 Accelerations initial_accelerations(const ContactGraph& graph, const std::vector<char>& free, QpMethod method,
-                                    bool certificate) {
+                                    bool certificate, const std::vector<double>* warm_forces) {
   if (!free.empty() && free.size() != graph.size()) throw std::invalid_argument("free: one flag per block expected");
   if (certificate) {
     Accelerations rest;
@@ -214,7 +226,7 @@ Accelerations initial_accelerations(const ContactGraph& graph, const std::vector
     none.force.assign(2 * graph.contacts.size(), 0.0);
     return none;
   }
-  return method == QpMethod::kNnls ? by_nnls(graph, rows) : by_nlopt(graph, rows);
+  return method == QpMethod::kNnls ? by_nnls(graph, rows, warm_forces) : by_nlopt(graph, rows);
 }
 
 }  // namespace bricklayer::core

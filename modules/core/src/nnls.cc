@@ -9,17 +9,15 @@
 namespace bricklayer::core {
 namespace {
 
-// Cholesky factor L (lower) of gram restricted to an ordered passive set. L is kept banded: row t holds
-// nonzeros only in columns [start_[t], t], and every operation touches only that band, so adding or
-// removing an index costs O(p * band) instead of O(p^2) when neighbouring columns sit close together.
-// Entries outside a row's band may hold stale values and are never read.
+// Cholesky factor L (lower) of gram restricted to an ordered passive set, stored by bands: row t holds
+// columns [start_[t], t] only, and every operation touches only those bands, so adding or removing an index
+// costs O(p * band) time and the factor O(p * band) memory when neighbouring columns sit close together.
 template <class Ops>
 class PassiveCholesky {
  public:
   // capacity: the largest possible passive set (rank of A <= its number of rows).
   PassiveCholesky(const Ops& ops, int columns, int capacity)
-      : ops_(ops), l_(capacity, capacity), start_(static_cast<size_t>(capacity), 0),
-        position_(static_cast<size_t>(columns), -1), work_(capacity) {}
+      : ops_(ops), capacity_(capacity), position_(static_cast<size_t>(columns), -1), work_(capacity) {}
 
   const std::vector<int>& indices() const { return passive_; }
   int size() const { return static_cast<int>(passive_.size()); }
@@ -27,7 +25,7 @@ class PassiveCholesky {
   // Appends index j; false (and nothing changes) when its column is numerically dependent on the passive ones.
   bool add(int j) {
     const int p = size();
-    if (p >= l_.rows()) return false;  // more columns than rows: j is necessarily dependent
+    if (p >= capacity_) return false;  // more columns than rows: j is necessarily dependent
     const double gjj = ops_.gram(j, j);
     if (!(gjj > 0.0)) return false;
     // G_Pj is nonzero only for passive columns that share a row of A with j.
@@ -43,16 +41,20 @@ class PassiveCholesky {
     for (int q : touched_) work_(q) = ops_.gram(passive_[static_cast<size_t>(q)], j);
     // Forward substitution from the first nonzero: entries before it stay zero.
     for (int t = first; t < p; ++t) {
+      const std::vector<double>& row = rows_[static_cast<size_t>(t)];
+      const int st = start_[static_cast<size_t>(t)];
       double v = work_(t);
-      for (int k = std::max(start_[static_cast<size_t>(t)], first); k < t; ++k) v -= l_(t, k) * work_(k);
-      work_(t) = v / l_(t, t);
+      for (int k = std::max(st, first); k < t; ++k) v -= row[static_cast<size_t>(k - st)] * work_(k);
+      work_(t) = v / row.back();
     }
     double d = gjj;
     for (int t = first; t < p; ++t) d -= work_(t) * work_(t);
     if (!(d > 1e-12 * gjj)) return false;
-    for (int t = first; t < p; ++t) l_(p, t) = work_(t);
-    l_(p, p) = std::sqrt(d);
-    start_[static_cast<size_t>(p)] = first;
+    std::vector<double> row(static_cast<size_t>(p - first + 1));
+    for (int t = first; t < p; ++t) row[static_cast<size_t>(t - first)] = work_(t);
+    row.back() = std::sqrt(d);
+    rows_.push_back(std::move(row));
+    start_.push_back(first);
     position_[static_cast<size_t>(j)] = p;
     passive_.push_back(j);
     return true;
@@ -61,24 +63,18 @@ class PassiveCholesky {
   // Removes the passive index at position k and restores the triangle with Givens rotations.
   void remove_at(int k) {
     const int p = size();
-    // Shift rows k+1.. up by one (only their bands).
-    for (int t = k + 1; t < p; ++t) {
-      const int s = start_[static_cast<size_t>(t)];
-      for (int c = s; c <= t; ++c) l_(t - 1, c) = l_(t, c);
-      start_[static_cast<size_t>(t - 1)] = s;
-    }
-    // Row r (now k..p-2) has its diagonal one column to the right. Rotations on columns (i, i+1), i = k..p-2,
-    // move it back; a rotation touches only rows whose band reaches column i + 1.
+    rows_.erase(rows_.begin() + k);
+    start_.erase(start_.begin() + k);
+    // Row r (now k..p-2) ends one column right of the diagonal. Rotations on columns (i, i+1), i = k..p-2,
+    // move it back; a rotation touches only rows whose band reaches column i + 1, and a row whose band
+    // starts at i + 1 grows by one column to the left.
     const int rows = p - 1;
     buckets_.assign(static_cast<size_t>(p + 1), {});
     active_.clear();
     for (int r = k; r < rows; ++r) {
       const int s = start_[static_cast<size_t>(r)];
       if (s <= k + 1) {
-        if (s == k + 1) {  // the band grows by one column to the left
-          l_(r, k) = 0.0;
-          start_[static_cast<size_t>(r)] = k;
-        }
+        if (s == k + 1) grow_left(r);
         active_.push_back(r);
       } else {
         buckets_[static_cast<size_t>(s)].push_back(r);
@@ -86,28 +82,24 @@ class PassiveCholesky {
     }
     for (int i = k; i < rows; ++i) {
       for (int r : buckets_[static_cast<size_t>(i + 1)]) {
-        if (i + 1 > k + 1) {
-          l_(r, i) = 0.0;  // the band grows by one column to the left
-          start_[static_cast<size_t>(r)] = i;
-          active_.push_back(r);
-        }
+        grow_left(r);
+        active_.push_back(r);
       }
-      const double a = l_(i, i);
-      const double b = l_(i, i + 1);
+      const double a = at(i, i);
+      const double b = at(i, i + 1);
       const double norm = std::hypot(a, b);
       if (norm != 0.0) {
         const double c = a / norm;
         const double sn = b / norm;
         for (int r : active_) {
           if (r < i) continue;
-          const double u = l_(r, i);
-          const double v = l_(r, i + 1);
-          l_(r, i) = c * u + sn * v;
-          l_(r, i + 1) = -sn * u + c * v;
+          const double u = at(r, i);
+          const double v = at(r, i + 1);
+          at(r, i) = c * u + sn * v;
+          at(r, i + 1) = -sn * u + c * v;
         }
       }
-      l_(i, i + 1) = 0.0;
-      // Rows above the next pivot are finished.
+      rows_[static_cast<size_t>(i)].pop_back();  // (i, i+1) is now zero: row i ends at its diagonal
       active_.erase(std::remove_if(active_.begin(), active_.end(), [&](int r) { return r <= i; }), active_.end());
     }
     position_[static_cast<size_t>(passive_[static_cast<size_t>(k)])] = -1;
@@ -120,23 +112,35 @@ class PassiveCholesky {
     const int p = size();
     Eigen::VectorXd y(p);
     for (int t = 0; t < p; ++t) {
+      const std::vector<double>& row = rows_[static_cast<size_t>(t)];
+      const int st = start_[static_cast<size_t>(t)];
       double v = rhs(passive_[static_cast<size_t>(t)]);
-      for (int c = start_[static_cast<size_t>(t)]; c < t; ++c) v -= l_(t, c) * y(c);
-      y(t) = v / l_(t, t);
+      for (int c = st; c < t; ++c) v -= row[static_cast<size_t>(c - st)] * y(c);
+      y(t) = v / row.back();
     }
     for (int t = p - 1; t >= 0; --t) {
-      y(t) /= l_(t, t);
-      const double st = y(t);
-      for (int c = start_[static_cast<size_t>(t)]; c < t; ++c) y(c) -= l_(t, c) * st;
+      const std::vector<double>& row = rows_[static_cast<size_t>(t)];
+      const int st = start_[static_cast<size_t>(t)];
+      y(t) /= row.back();
+      const double yt = y(t);
+      for (int c = st; c < t; ++c) y(c) -= row[static_cast<size_t>(c - st)] * yt;
     }
     return y;
   }
 
  private:
+  double& at(int r, int c) { return rows_[static_cast<size_t>(r)][static_cast<size_t>(c - start_[static_cast<size_t>(r)])]; }
+  void grow_left(int r) {
+    auto& row = rows_[static_cast<size_t>(r)];
+    row.insert(row.begin(), 0.0);
+    --start_[static_cast<size_t>(r)];
+  }
+
   const Ops& ops_;
-  Eigen::MatrixXd l_;
-  std::vector<int> start_;     // first nonzero column of each row of L
-  std::vector<int> position_;  // column -> position in passive_, or -1
+  int capacity_;
+  std::vector<std::vector<double>> rows_;  // rows_[t][c - start_[t]] = L(t, c)
+  std::vector<int> start_;                 // first column of each row's band
+  std::vector<int> position_;              // column -> position in passive_, or -1
   std::vector<int> passive_;
   Eigen::VectorXd work_;
   std::vector<int> touched_;

@@ -221,7 +221,7 @@ void annotate_exact(const ContactGraph& g, const PredictOptions& options, Predic
     if (from_row >= g.num_rows()) break;
     std::vector<char> free(g.size(), 0);
     for (size_t i = 0; i < g.size(); ++i) free[i] = g.row[i] >= from_row ? 1 : 0;
-    sub = initial_accelerations(g, free, options.qp);
+    sub = initial_accelerations(g, free, options.qp, true, &current->force);
     current = &sub;
   }
 }

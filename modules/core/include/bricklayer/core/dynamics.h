@@ -42,7 +42,11 @@ bool two_point_certificate(const ContactGraph& graph, const std::vector<char>& f
 // free: one flag per block; a block whose flag is 0 is held fixed (it acts like the surface). Empty: all free.
 // Throws std::runtime_error when the backend fails.
 // certificate: try two_point_certificate() first (off only to measure the QP itself).
+// warm_forces (NNLS only, optional): contact forces of a related solution (Accelerations::force, e.g. the same
+// pile with more blocks free); the contact ends carrying force there seed the NNLS passive set. Any value
+// gives the same answer; a close one saves iterations.
 Accelerations initial_accelerations(const ContactGraph& graph, const std::vector<char>& free = {},
-                                    QpMethod method = QpMethod::kNnls, bool certificate = true);
+                                    QpMethod method = QpMethod::kNnls, bool certificate = true,
+                                    const std::vector<double>* warm_forces = nullptr);
 
 }  // namespace bricklayer::core
