@@ -1,0 +1,36 @@
+// The calibration file loaders: bricklayer::calibration::parse_calibration_json (the strict loader that
+// bricklayer-calibrate, vision and projection use) and vision's own reader (which also accepts the
+// LCM-encoded calibration_t). Any bytes give a calibration or a clear std::runtime_error; a
+// calibration the strict loader accepts must also be accepted by the vision detector (which builds
+// its remap tables from it) and must survive a save/parse round trip.
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/vision/detector.h"
+#include "bricklayer/vision/frame.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  if (size > (1 << 20) + 16) return 0;
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  try {
+    const bricklayer::calibration_t cal = bricklayer::calibration::parse_calibration_json(text);
+    const std::string again = bricklayer::calibration::calibration_to_json(cal);
+    (void)bricklayer::calibration::parse_calibration_json(again);
+    // Only small images: the detector's remap tables are sized by the calibration's camera image.
+    if (static_cast<int64_t>(cal.camera_width) * cal.camera_height <= 1280 * 960) {
+      bricklayer::vision::Detector detector;
+      try {
+        detector.set_calibration(cal);
+      } catch (const std::invalid_argument&) {
+      }
+    }
+  } catch (const bricklayer::calibration::CalibrationFileError&) {
+  }
+  try {
+    (void)bricklayer::vision::parse_calibration_json(text);
+  } catch (const std::runtime_error&) {
+  }
+  return 0;
+}
