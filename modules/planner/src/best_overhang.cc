@@ -156,7 +156,7 @@ int rightmost(const std::vector<PlacedBlock>& blocks) {
 }  // namespace
 
 std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& start_unsorted, int target,
-                                             double tolerance) {
+                                             double tolerance, bool feasibility_phase) {
   if (start_unsorted.empty()) return std::nullopt;
   if (target < 0 || target >= static_cast<int>(start_unsorted.size()))
     throw std::invalid_argument("optimise_layout: target " + std::to_string(target) + " out of range");
@@ -265,7 +265,7 @@ std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& sta
   // NLopt calls infeasible ends a success: measure the residual ourselves. Far-from-balanced starts often end
   // infeasible: then first find a balanced layout near the start, and maximise from there.
   double residual = residual_of(w);
-  if (!(residual <= tolerance)) {
+  if (!(residual <= tolerance) && feasibility_phase) {
     w = v;
     run(w, true);
     if (!(residual_of(w) <= 1e-6)) return std::nullopt;
@@ -449,8 +449,8 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
   }
   for (int n = 2; n <= n_max; ++n) {
     std::map<std::string, OverhangStack> found;
-    auto consider = [&](const std::vector<PlacedBlock>& seed) {
-      auto result = optimise_layout(seed, rightmost(seed));
+    auto consider = [&](const std::vector<PlacedBlock>& seed, bool far_from_balanced = false) {
+      auto result = optimise_layout(seed, rightmost(seed), 1e-9, far_from_balanced);
       if (!result) return;
       auto [it, inserted] = found.emplace(shape_key(*result), *result);
       if (!inserted && result->overhang > it->second.overhang) it->second = *result;
@@ -458,7 +458,7 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
     for (const OverhangStack& s : beam)
       for (const auto& seed : grown(s.blocks)) consider(seed);
     if (n >= 8)
-      for (const auto& seed : wall_seeds(n, options.wall_seeds, rng)) consider(seed);
+      for (const auto& seed : wall_seeds(n, options.wall_seeds, rng)) consider(seed, true);
     // Seeded restarts around the best few.
     std::vector<OverhangStack> ranked;
     for (auto& [key, s] : found) ranked.push_back(s);

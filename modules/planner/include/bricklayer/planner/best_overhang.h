@@ -31,9 +31,11 @@ struct OverhangStack {
 };
 
 // Optimises the positions of a layout (rows fixed, x the start) for the largest overhang of block target.
-// Returns nothing when SLSQP ends infeasible (residual above tolerance).
+// Returns nothing when SLSQP ends infeasible (residual above tolerance). feasibility_phase: when the
+// maximisation ends infeasible, find the balanced layout closest to the start and maximise again from there
+// (doubles the cost of failures; worth it for starts far from balanced).
 std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& start, int target,
-                                             double tolerance = 1e-9);
+                                             double tolerance = 1e-9, bool feasibility_phase = false);
 
 // Seeded brick-wall start layouts of n blocks with random row profiles (used by the search for n >= 8).
 std::vector<std::vector<PlacedBlock>> wall_layouts(int n, int count, uint64_t seed);
