@@ -131,6 +131,7 @@ int Main(int argc, char** argv) {
   Flags flags("bricklayer-bench-calibration", "Calibration accuracy and cost over random simcam setups.");
   flags.add("setups", "20", "random setups (seeds 1..N)");
   flags.add("nuisance", "mild", "simcam nuisance level: clean, mild, strong, harsh");
+  flags.add_bool("no-shelf", "do not search the shelf (board frame from the defaults as given)");
   flags.add_bool("gray-code", "also measure a dense Gray-code map (32 more frames per setup; slow)");
   if (!flags.parse(argc, argv)) return 0;
   const int setups = static_cast<int>(flags.get_int("setups"));
@@ -138,6 +139,7 @@ int Main(int argc, char** argv) {
   nuisance.layout_seed = 7;
 
   cal::CalibrationOptions options;
+  options.board_from_shelf = !flags.get_bool("no-shelf");
   const auto steps = cal::calibration_steps(options);
   Stats corners, centres, gray;
   int rejected = 0;
