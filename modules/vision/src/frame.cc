@@ -6,6 +6,7 @@
 #include <iterator>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -31,6 +32,27 @@ bool png_complete(const std::vector<uint8_t>& d) {
   for (int i = 0; i < 8; ++i)
     if (d[d.size() - 8 + i] != iend[i]) return false;
   return true;
+}
+
+// The image size a JPEG (first SOFn marker) or PNG (IHDR) header declares, read before decoding so a
+// small hostile file that declares a huge image (a decompression bomb) is refused without allocating.
+// {-1, -1} when the header is not found.
+std::pair<int64_t, int64_t> declared_size(const std::vector<uint8_t>& d, bool jpeg) {
+  auto be16 = [&](size_t i) { return (int64_t(d[i]) << 8) | d[i + 1]; };
+  auto be32 = [&](size_t i) { return (be16(i) << 16) | be16(i + 2); };
+  if (!jpeg) return d.size() >= 24 ? std::pair{be32(16), be32(20)} : std::pair{int64_t(-1), int64_t(-1)};
+  size_t i = 2;
+  while (i + 4 <= d.size()) {
+    if (d[i] != 0xFF) return {-1, -1};
+    const uint8_t m = d[i + 1];
+    if (m == 0xFF) { ++i; continue; }  // fill byte
+    if (m == 0x01 || (m >= 0xD0 && m <= 0xD8)) { i += 2; continue; }  // markers without a length
+    const bool sof = m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC;
+    if (sof) return i + 9 <= d.size() ? std::pair{be16(i + 7), be16(i + 5)} : std::pair{int64_t(-1), int64_t(-1)};
+    if (m == 0xDA) return {-1, -1};  // scan data before any frame header
+    i += 2 + static_cast<size_t>(be16(i + 2));
+  }
+  return {-1, -1};
 }
 
 void set_error(std::string* error, std::string text) {
@@ -76,6 +98,13 @@ cv::Mat decode_image(const image_t& image, std::string* error) {
       const bool jpeg = image.format == image_t::FORMAT_JPEG;
       if (jpeg ? !jpeg_complete(image.data) : !png_complete(image.data)) {
         set_error(error, what + (jpeg ? "not a complete JPEG (truncated or corrupt)" : "not a complete PNG (truncated or corrupt)"));
+        return {};
+      }
+      const auto [declared_w, declared_h] = declared_size(image.data, jpeg);
+      if (declared_w != image.width || declared_h != image.height) {
+        set_error(error, what + (jpeg ? "JPEG" : "PNG") + " header declares " + std::to_string(declared_w) + "x" +
+                             std::to_string(declared_h) + " but the message says " + std::to_string(image.width) + "x" +
+                             std::to_string(image.height));
         return {};
       }
       try {
