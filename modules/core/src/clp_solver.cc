@@ -2,7 +2,6 @@
 #include <cmath>
 
 #include <ClpSimplex.hpp>
-#include <CoinPackedMatrix.hpp>
 
 #include "bricklayer/core/program.h"
 
@@ -25,26 +24,28 @@ class ClpSolver final : public Solver {
   SolveResult do_solve(const Problem& problem, const SolverOptions& options) const override {
     const int n = problem.num_variables();
     const int m = problem.num_rows();
-    std::vector<int> rows, cols;
-    std::vector<double> values;
-    rows.reserve(problem.a.size());
-    cols.reserve(problem.a.size());
-    values.reserve(problem.a.size());
-    for (const Entry& e : problem.a) {
-      rows.push_back(e.row);
-      cols.push_back(e.col);
-      values.push_back(e.value);
+    // Column-ordered (CSC) arrays by counting sort; duplicates are kept (CLP sums them).
+    std::vector<CoinBigIndex> starts(static_cast<size_t>(n) + 1, 0);
+    for (const Entry& e : problem.a) ++starts[static_cast<size_t>(e.col) + 1];
+    for (int j = 0; j < n; ++j) starts[static_cast<size_t>(j) + 1] += starts[static_cast<size_t>(j)];
+    std::vector<int> rows(problem.a.size());
+    std::vector<double> values(problem.a.size());
+    {
+      std::vector<CoinBigIndex> next(starts.begin(), starts.end() - 1);
+      for (const Entry& e : problem.a) {
+        const CoinBigIndex at = next[static_cast<size_t>(e.col)]++;
+        rows[static_cast<size_t>(at)] = e.row;
+        values[static_cast<size_t>(at)] = e.value;
+      }
     }
-    // Column-ordered so that duplicates are summed; explicit sizes keep empty rows/columns.
-    CoinPackedMatrix matrix(true, rows.data(), cols.data(), values.data(), static_cast<CoinBigIndex>(values.size()));
-    matrix.setDimensions(m, n);
     std::vector<double> lo(n), hi(n), rlo(m), rhi(m);
     for (int i = 0; i < n; ++i) lo[i] = to_clp(problem.lower[i]), hi[i] = to_clp(problem.upper[i]);
     for (int r = 0; r < m; ++r) rlo[r] = to_clp(problem.row_lower[r]), rhi[r] = to_clp(problem.row_upper[r]);
 
     ClpSimplex model;
     model.setLogLevel(0);
-    model.loadProblem(matrix, lo.data(), hi.data(), problem.cost.data(), rlo.data(), rhi.data());
+    model.loadProblem(n, m, starts.data(), rows.data(), values.data(), lo.data(), hi.data(), problem.cost.data(),
+                      rlo.data(), rhi.data());
     if (static_cast<int>(problem.basis_hint.size()) == m && m > 0) {
       model.createStatus();
       for (int i = 0; i < n; ++i) {
