@@ -60,7 +60,7 @@ TEST_CASE("a block with its centre over the surface stands, beyond the edge it i
   REQUIRE(falls.num_blocks == 1);
   CHECK(falls.blocks[0].state == block_prediction_t::STATE_CAUSE);
   CHECK(falls.annotator == "exact");
-  CHECK(falls.solver == "clp");
+  CHECK_FALSE(falls.solver.empty());  // the core says what ran: "clp", "clp+nnls", "nnls", ...
 }
 
 TEST_CASE("every answer carries the utime and frame number of its stack") {
@@ -137,13 +137,18 @@ TEST_CASE("invalid stacks are answered with STATUS_INVALID_STACK and the core's 
   }
 }
 
-TEST_CASE("an unknown backend is a solver error, not a crash") {
-  PredictionConfig config;
-  config.solver = "no-such-solver";
-  PredictionLogic logic(config);
+TEST_CASE("a failing core is a solver error with its message, not a crash") {
+  auto failing = [](const core::Stack&, const core::PredictOptions&) -> core::Prediction {
+    throw core::SolverError("balance LP (clp): numerical trouble");
+  };
+  PredictionLogic logic(PredictionConfig{}, failing);
   prediction_t p = logic.answer(one_block(-0.4));
   CHECK(p.status == prediction_t::STATUS_SOLVER_ERROR);
-  CHECK_FALSE(p.error.empty());
+  CHECK(p.error == "balance LP (clp): numerical trouble");
+  CHECK(p.num_blocks == 0);
+  auto odd = [](const core::Stack&, const core::PredictOptions&) -> core::Prediction { throw std::bad_alloc(); };
+  PredictionLogic logic2(PredictionConfig{}, odd);
+  CHECK(logic2.answer(one_block(-0.4)).status == prediction_t::STATUS_SOLVER_ERROR);
 }
 
 TEST_CASE("a bad configuration is rejected up front") {
@@ -152,6 +157,9 @@ TEST_CASE("a bad configuration is rejected up front") {
   CHECK_THROWS_AS(PredictionLogic(config), std::invalid_argument);
   config.annotator = "exact";
   config.max_blocks = 0;
+  CHECK_THROWS_AS(PredictionLogic(config), std::invalid_argument);
+  config.max_blocks = 10;
+  config.solver = "cplex";
   CHECK_THROWS_AS(PredictionLogic(config), std::invalid_argument);
 }
 
@@ -168,6 +176,14 @@ TEST_CASE("answers are a pure function of the stack: same bytes every time, for 
       CHECK(bytes(a.answer(s)) == first);
     }
   }
+}
+
+TEST_CASE("the LP backend named by a recorded solver field") {
+  CHECK(prediction::lp_backend_of("clp") == "clp");
+  CHECK(prediction::lp_backend_of("clp+nnls") == "clp");
+  CHECK(prediction::lp_backend_of("nlopt+nnls") == "nlopt");
+  CHECK(prediction::lp_backend_of("nnls").empty());
+  CHECK(prediction::lp_backend_of("").empty());
 }
 
 TEST_CASE("the sample stacks are valid piles and deterministic") {

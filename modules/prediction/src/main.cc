@@ -96,12 +96,10 @@ int Main(int argc, char** argv) {
   int64_t max_blocks = flags.get_int("max-blocks");
   if (max_blocks < 1 || max_blocks > 100000) throw FlagError("--max-blocks must be between 1 and 100000");
   config.max_blocks = static_cast<size_t>(max_blocks);
-  if (config.solver != "clp" && config.solver != "nlopt")
-    throw FlagError("--solver must be clp or nlopt, got '" + config.solver + "'");
   try {
     prediction::PredictionLogic check(config);
   } catch (const std::invalid_argument& e) {
-    throw FlagError(std::string("--annotator: ") + e.what());
+    throw FlagError(e.what());  // names the bad --annotator / --solver / --max-blocks
   }
   std::string url = resolve_lcm_url(flags.get("lcm-url"));
   try {

@@ -1,6 +1,9 @@
 #include "bricklayer/prediction/prediction_logic.h"
 
+#include <algorithm>
 #include <stdexcept>
+
+#include "bricklayer/core/program.h"
 
 #include "bricklayer/block_prediction_t.hpp"
 
@@ -30,10 +33,24 @@ size_t max_stack_message_bytes(size_t max_blocks) {
   return 256 + 92 * max_blocks;
 }
 
-PredictionLogic::PredictionLogic(PredictionConfig config) : config_(std::move(config)) {
+PredictionLogic::PredictionLogic(PredictionConfig config, Predictor predictor)
+    : config_(std::move(config)), predictor_(std::move(predictor)) {
   if (config_.max_blocks == 0) throw std::invalid_argument("--max-blocks must be at least 1");
   options_.annotator = core::parse_annotator(config_.annotator);
+  if (lp_backend_of(config_.solver) != config_.solver) {
+    std::string known;
+    for (const auto& n : core::opt::solver_names()) known += (known.empty() ? "" : ", ") + n;
+    throw std::invalid_argument("unknown solver \"" + config_.solver + "\" (expected " + known + ")");
+  }
   options_.solver = config_.solver;
+  options_.limits.max_blocks = config_.max_blocks;
+  if (!predictor_) predictor_ = [](const core::Stack& s, const core::PredictOptions& o) { return core::predict(s, o); };
+}
+
+std::string lp_backend_of(const std::string& recorded_solver) {
+  const std::string head = recorded_solver.substr(0, recorded_solver.find('+'));
+  const auto names = core::opt::solver_names();
+  return std::find(names.begin(), names.end(), head) != names.end() ? head : "";
 }
 
 core::Stack to_core_stack(const stack_t& stack) {
@@ -66,8 +83,7 @@ prediction_t PredictionLogic::answer(const stack_t& stack) const {
   core::Prediction verdict;
   try {
     core::Stack s = to_core_stack(stack);
-    core::validate(s, core::StackLimits{config_.max_blocks});
-    verdict = core::predict(s, options_);
+    verdict = predictor_(s, options_);  // validates first (StackError)
   } catch (const core::StackError& e) {
     return empty_answer(stack, config_, prediction_t::STATUS_INVALID_STACK, e.what());
   } catch (const core::SolverError& e) {

@@ -41,7 +41,7 @@ int Main(int argc, char** argv) {
     module = std::make_unique<replay::PredictionReplay>(flags.get("annotator"), flags.get("solver"),
                                                         static_cast<size_t>(max_blocks));
   } catch (const std::invalid_argument& e) {
-    throw FlagError(std::string("--annotator: ") + e.what());
+    throw FlagError(e.what());  // names the bad --annotator / --solver
   }
   auto t0 = std::chrono::steady_clock::now();
   replay::ReplayReport report = replay::replay_log(flags.positional()[0], *module, flags.get_bool("check"), std::cout);

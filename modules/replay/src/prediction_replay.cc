@@ -36,17 +36,25 @@ std::vector<std::string> PredictionReplay::output_channels() const { return {cha
 void PredictionReplay::observe_recorded(const std::string&, const Bytes& bytes) {
   if (logic_ || (annotator_fixed_ && solver_fixed_)) return;
   auto p = decode_prediction(bytes);
-  if (!p) return;
-  // Adopt the recorded configuration (once), so a log made with --annotator paper checks as such.
-  try {
-    prediction::PredictionConfig candidate = config_;
-    if (!annotator_fixed_) candidate.annotator = p->annotator;
-    if (!solver_fixed_) candidate.solver = p->solver;
-    prediction::PredictionLogic check(candidate);
-    config_ = candidate;
-    annotator_fixed_ = solver_fixed_ = true;
-  } catch (const std::exception&) {
-    // an annotator this build does not know: keep the defaults; mismatches will say so
+  if (!p || p->status != prediction_t::STATUS_OK) return;
+  // Adopt the recorded configuration, so a log made with --annotator paper checks as such. The
+  // solver field says what ran ("clp", "clp+nnls"): its LP backend is what the process was given.
+  if (!annotator_fixed_) {
+    try {
+      prediction::PredictionConfig candidate = config_;
+      candidate.annotator = p->annotator;
+      prediction::PredictionLogic check(candidate);
+      config_ = candidate;
+      annotator_fixed_ = true;
+    } catch (const std::exception&) {
+      // an annotator this build does not know: keep the default; mismatches will say so
+    }
+  }
+  if (!solver_fixed_) {
+    if (std::string lp = prediction::lp_backend_of(p->solver); !lp.empty()) {
+      config_.solver = lp;
+      solver_fixed_ = true;
+    }
   }
 }
 

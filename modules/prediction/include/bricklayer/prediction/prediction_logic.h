@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <string>
 
 #include "bricklayer/core/predict.h"
@@ -24,8 +25,11 @@ size_t max_stack_message_bytes(size_t max_blocks);
 
 class PredictionLogic {
  public:
-  // Throws std::invalid_argument for an unknown annotator or a max_blocks of 0.
-  explicit PredictionLogic(PredictionConfig config);
+  // The core call; replaceable so a test can make it fail (default: core::predict).
+  using Predictor = std::function<core::Prediction(const core::Stack&, const core::PredictOptions&)>;
+
+  // Throws std::invalid_argument for an unknown annotator or solver, or a max_blocks of 0.
+  explicit PredictionLogic(PredictionConfig config, Predictor predictor = {});
 
   // Always answers: failures become a status and a one-line error, never an exception.
   //   stack.status != STATUS_OK            -> STATUS_NO_STACK
@@ -38,7 +42,12 @@ class PredictionLogic {
  private:
   PredictionConfig config_;
   core::PredictOptions options_;
+  Predictor predictor_;
 };
+
+// The LP backend named by a recorded prediction_t.solver ("clp", "clp+nnls", ...), or "" when it
+// names none this build knows.
+std::string lp_backend_of(const std::string& recorded_solver);
 
 // The core's own data model for a stack_t (no validation).
 core::Stack to_core_stack(const stack_t& stack);
