@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include <Eigen/SparseCore>
 
@@ -114,7 +115,12 @@ Accelerations by_nnls(const ContactGraph& g, const ContactRows& c, const std::ve
       initial.push_back(column_of[2 * static_cast<size_t>(sup.back()) + 1]);
     }
   }
-  const NnlsResult nnls = solve_nnls(A, b, 0, initial);
+  NnlsResult nnls = solve_nnls(A, b, 0, initial);
+  if (!nnls.converged) nnls = solve_nnls(A, b, 20 * m + 100);  // cold start with a generous limit
+  if (!nnls.converged) {
+    throw std::runtime_error("exact annotator QP (nnls): no convergence after " + std::to_string(nnls.iterations) +
+                             " iterations");
+  }
   // z = z0 + M^-1 J^T lambda = M^-1/2 (A lambda - b)
   const Eigen::VectorXd r = A * nnls.x - b;
   Accelerations out;

@@ -183,13 +183,25 @@ void annotate_paper(const ContactGraph& g, const PredictOptions& options, Predic
   }
 }
 
+// initial_accelerations() with backend failures reported as SolverError (predict()'s contract).
+Accelerations accelerations(const ContactGraph& g, const std::vector<char>& free, QpMethod qp,
+                            const std::vector<double>* warm = nullptr) {
+  try {
+    return initial_accelerations(g, free, qp, true, warm);
+  } catch (const std::invalid_argument&) {
+    throw;
+  } catch (const std::runtime_error& e) {
+    throw SolverError(e.what());
+  }
+}
+
 void annotate_exact(const ContactGraph& g, const PredictOptions& options, Prediction& p) {
   p.balanced = true;
   if (g.size() == 0) return;
   if (two_point_certificate(g)) return;
   if (options.lp_first && balance_violation(g, options.solver) <= kBalanceTolerance) return;
   p.qp = to_string(options.qp);
-  const Accelerations full = initial_accelerations(g, {}, options.qp);
+  const Accelerations full = accelerations(g, {}, options.qp);
   for (size_t i = 0; i < g.size(); ++i) {
     p.blocks[i].accel = full.a[i];
     p.blocks[i].alpha = full.alpha[i];
@@ -221,7 +233,7 @@ void annotate_exact(const ContactGraph& g, const PredictOptions& options, Predic
     if (from_row >= g.num_rows()) break;
     std::vector<char> free(g.size(), 0);
     for (size_t i = 0; i < g.size(); ++i) free[i] = g.row[i] >= from_row ? 1 : 0;
-    sub = initial_accelerations(g, free, options.qp, true, &current->force);
+    sub = accelerations(g, free, options.qp, &current->force);
     current = &sub;
   }
 }
