@@ -27,8 +27,8 @@ void check_lcm_url(const std::string& url, bool allow_routed) {
     throw std::invalid_argument("LCM URL '" + url + "': unknown provider '" + provider +
                                 "' (expected udpm, file, memq or tcpq)");
   if (provider == "udpm") {
-    auto ttl = url.find("ttl=");
-    if (ttl != std::string::npos) {
+    // Every occurrence: LCM keeps the last value of a repeated option, so "?ttl=0&ttl=5" is ttl=5.
+    for (auto ttl = url.find("ttl="); ttl != std::string::npos; ttl = url.find("ttl=", ttl + 4)) {
       int value = std::atoi(url.c_str() + ttl + 4);
       if (value > 1 && !allow_routed)
         throw std::invalid_argument("LCM URL '" + url + "': ttl=" + std::to_string(value) +
