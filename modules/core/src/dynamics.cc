@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -175,11 +176,23 @@ Accelerations by_nlopt(const ContactGraph& g, const ContactRows& c) {
 
 }  // namespace
 
-bool two_point_certificate(const ContactGraph& g, const std::vector<char>& free, std::vector<double>* forces) {
-  std::vector<double> local;
-  std::vector<double>& f = forces ? *forces : local;
+namespace {
+
+// One top-down statics pass. kHull: each block rests on the two extreme ends of its support hull. kCentred:
+// each block picks, among all pairs of its contact ends that carry its load with nonnegative forces, the pair
+// that puts the load closest to the middle of each lower block's own support hull (keeping lower blocks
+// stable). Either succeeding proves balance.
+enum class Split { kHull, kCentred };
+
+bool statics_pass(const ContactGraph& g, const std::vector<char>& free, Split split, std::vector<double>& f) {
   f.assign(2 * g.contacts.size(), 0.0);
   auto is_free = [&](int i) { return free.empty() || free[static_cast<size_t>(i)] != 0; };
+  auto hull_middle = [&](int block, double& middle) {
+    const auto& sup = g.supports[static_cast<size_t>(block)];
+    if (sup.empty()) return false;
+    middle = 0.5 * (g.contacts[static_cast<size_t>(sup.front())].left + g.contacts[static_cast<size_t>(sup.back())].right);
+    return true;
+  };
   for (int r = g.num_rows() - 1; r >= 0; --r) {
     for (int i : g.rows[static_cast<size_t>(r)]) {
       if (!is_free(i)) continue;
@@ -196,20 +209,74 @@ bool two_point_certificate(const ContactGraph& g, const std::vector<char>& free,
       }
       const auto& sup = g.supports[static_cast<size_t>(i)];
       if (sup.empty()) return false;
-      const int kl = sup.front();
-      const int kr = sup.back();
-      const double dl = g.contacts[static_cast<size_t>(kl)].left - c;
-      const double dr = g.contacts[static_cast<size_t>(kr)].right - c;
-      if (!(dr - dl > kContactTolerance)) return false;
-      const double right = (moment - load * dl) / (dr - dl);
-      const double left = load - right;
       const double tol = -1e-9 * load;
-      if (right < tol || left < tol) return false;
-      f[2 * static_cast<size_t>(kl)] = std::max(0.0, left);
-      f[2 * static_cast<size_t>(kr) + 1] = std::max(0.0, right);
+      // Forces at contact ends e1 (position p1) and e2 (p2 > p1) carrying (load, moment).
+      auto split_at = [&](double p1, double p2, double& f1, double& f2) {
+        const double d1 = p1 - c;
+        const double d2 = p2 - c;
+        if (!(d2 - d1 > kContactTolerance)) return false;
+        f2 = (moment - load * d1) / (d2 - d1);
+        f1 = load - f2;
+        return f1 >= tol && f2 >= tol;
+      };
+      if (split == Split::kHull) {
+        const int kl = sup.front();
+        const int kr = sup.back();
+        double fl = 0.0;
+        double fr = 0.0;
+        if (!split_at(g.contacts[static_cast<size_t>(kl)].left, g.contacts[static_cast<size_t>(kr)].right, fl, fr)) {
+          return false;
+        }
+        f[2 * static_cast<size_t>(kl)] = std::max(0.0, fl);
+        f[2 * static_cast<size_t>(kr) + 1] = std::max(0.0, fr);
+        continue;
+      }
+      size_t best1 = 0;
+      size_t best2 = 0;
+      double best_f1 = 0.0;
+      double best_f2 = 0.0;
+      double best_score = std::numeric_limits<double>::infinity();
+      const size_t ends = 2 * sup.size();
+      auto end_position = [&](size_t e) {
+        const Contact& ct = g.contacts[static_cast<size_t>(sup[e / 2])];
+        return e % 2 == 0 ? ct.left : ct.right;
+      };
+      auto end_cost = [&](size_t e) {  // distance of the end from the middle of the lower block's support
+        const Contact& ct = g.contacts[static_cast<size_t>(sup[e / 2])];
+        if (ct.lower == kSurface || !is_free(ct.lower)) return 0.0;
+        double middle = 0.0;
+        if (!hull_middle(ct.lower, middle)) return 1e3;
+        return std::abs(end_position(e) - middle);
+      };
+      for (size_t e1 = 0; e1 < ends; ++e1) {
+        for (size_t e2 = e1 + 1; e2 < ends; ++e2) {
+          double f1 = 0.0;
+          double f2 = 0.0;
+          if (!split_at(end_position(e1), end_position(e2), f1, f2)) continue;
+          const double score = f1 * end_cost(e1) + f2 * end_cost(e2);
+          if (score < best_score) {
+            best_score = score;
+            best1 = e1;
+            best2 = e2;
+            best_f1 = f1;
+            best_f2 = f2;
+          }
+        }
+      }
+      if (!std::isfinite(best_score)) return false;
+      f[2 * static_cast<size_t>(sup[best1 / 2]) + best1 % 2] += std::max(0.0, best_f1);
+      f[2 * static_cast<size_t>(sup[best2 / 2]) + best2 % 2] += std::max(0.0, best_f2);
     }
   }
   return true;
+}
+
+}  // namespace
+
+bool two_point_certificate(const ContactGraph& g, const std::vector<char>& free, std::vector<double>* forces) {
+  std::vector<double> local;
+  std::vector<double>& f = forces ? *forces : local;
+  return statics_pass(g, free, Split::kHull, f) || statics_pass(g, free, Split::kCentred, f);
 }
 
 Accelerations initial_accelerations(const ContactGraph& graph, const std::vector<char>& free, QpMethod method,

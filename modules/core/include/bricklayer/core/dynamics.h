@@ -32,8 +32,9 @@ struct Accelerations {
   bool any_moving() const;
 };
 
-// Statics shortcut (O(n)): every free block is assumed to rest on the two extreme ends of its support hull,
-// and the forces are computed row by row from the top. If every force is >= -1e-9 x (the load) this is a
+// Statics shortcut (O(n)): every free block is assumed to rest on two of its contact ends (first the two
+// extreme ends of its support hull; if that fails, for each block the pair that keeps the load nearest the
+// middle of the lower blocks' supports), and the forces are computed row by row from the top. If every force is >= -1e-9 x (the load) this is a
 // proof that the pile is balanced (all initial accelerations are zero). false means "no proof", not
 // "unbalanced". forces (optional): as Accelerations::force.
 bool two_point_certificate(const ContactGraph& graph, const std::vector<char>& free = {},
