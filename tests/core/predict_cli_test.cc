@@ -1,6 +1,7 @@
 // bricklayer-predict as a real process: exit codes, stdin, --jsonl with a bad line in the middle.
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -64,6 +65,10 @@ TEST_CASE("cli: reads a file; the bundled example stacks all predict") {
   const Run r = predict_cli(std::string(BRICKLAYER_SOURCE_DIR) + "/launch/stacks/figure15-middle-alone.json", "");
   REQUIRE(r.status == 0);
   CHECK(nlohmann::json::parse(r.out)["unbalanced"] == nlohmann::json::array({1}));
+  CHECK(nlohmann::json::parse(r.out)["name"] == "figure15-middle-alone");  // the input's label is echoed
+  const Run all = predict_cli("--jsonl " + std::string(BRICKLAYER_SOURCE_DIR) + "/launch/stacks/examples.jsonl", "");
+  CHECK(all.status == 0);
+  CHECK(std::count(all.out.begin(), all.out.end(), '\n') >= 9);
   const Run missing = predict_cli("/nonexistent/stack.json", "");
   CHECK(missing.status == 1);
   CHECK(missing.err.find("cannot open") != std::string::npos);

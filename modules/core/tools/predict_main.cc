@@ -16,8 +16,16 @@ namespace {
 using bricklayer::core::PredictOptions;
 
 std::string predict_text(const std::string& text, const PredictOptions& options) {
-  const auto stack = bricklayer::core::parse_stack(text, options.limits);
-  return bricklayer::core::to_json(bricklayer::core::predict(stack, options)).dump();
+  nlohmann::json input;
+  try {
+    input = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw bricklayer::core::StackError(std::string("not valid JSON: ") + e.what());
+  }
+  const auto stack = bricklayer::core::stack_from_json(input, options.limits);
+  nlohmann::json out = bricklayer::core::to_json(bricklayer::core::predict(stack, options));
+  if (const auto name = input.find("name"); name != input.end()) out["name"] = *name;  // echo the label
+  return out.dump();
 }
 
 int Main(int argc, char** argv) {
