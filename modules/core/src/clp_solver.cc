@@ -63,7 +63,12 @@ class ClpSolver final : public Solver {
     model.setPrimalTolerance(options.feasibility_tolerance);
     model.setDualTolerance(1e-9);
     if (options.max_iterations > 0) model.setMaximumIterations(options.max_iterations);
-    model.dual();
+    const bool hinted = static_cast<int>(problem.basis_hint.size()) == m && m > 0;
+    if (hinted && problem.hint_primal_feasible) {
+      model.primal();
+    } else {
+      model.dual();
+    }
 
     SolveResult result;
     result.native_status = model.status();

@@ -150,6 +150,67 @@ void annotate_balance(const ContactGraph& g, const PredictOptions& options, Pred
   }
 }
 
+// A primal feasible basis for the paper LP, built top-down like the certificate: each block rests on the two
+// extreme ends of its support hull; where that needs a negative force, on one support end and one of its
+// fictitious forces (or on its two fictitious forces). Empty when some block cannot be carried that way.
+std::vector<int> paper_primal_basis(const ContactGraph& g, const std::vector<Fictitious>& candidates,
+                                    const std::vector<int>& var, const std::vector<int>& contact_var) {
+  std::vector<std::vector<size_t>> of_block(g.size());
+  for (size_t k = 0; k < candidates.size(); ++k) of_block[static_cast<size_t>(candidates[k].block)].push_back(k);
+  std::vector<double> f(2 * g.contacts.size(), 0.0);
+  std::vector<int> basis;
+  basis.reserve(2 * g.size());
+  for (int r = g.num_rows() - 1; r >= 0; --r) {
+    for (int i : g.rows[static_cast<size_t>(r)]) {
+      const double c = g.centre(i);
+      double load = 1.0;
+      double moment = 0.0;
+      for (int k : g.carries[static_cast<size_t>(i)]) {
+        const Contact& ct = g.contacts[static_cast<size_t>(k)];
+        load += f[2 * static_cast<size_t>(k)] + f[2 * static_cast<size_t>(k) + 1];
+        moment += f[2 * static_cast<size_t>(k)] * (ct.left - c) + f[2 * static_cast<size_t>(k) + 1] * (ct.right - c);
+      }
+      const double tol = -1e-9 * load;
+      // A support point: position, LP variable, contact-end index (-1 for a fictitious force).
+      struct Point {
+        double position;
+        int variable;
+        int end;
+      };
+      std::vector<Point> points;
+      const auto& sup = g.supports[static_cast<size_t>(i)];
+      if (!sup.empty()) {
+        const int kl = sup.front();
+        const int kr = sup.back();
+        points.push_back({g.contacts[static_cast<size_t>(kl)].left, contact_var[static_cast<size_t>(kl)], 2 * kl});
+        points.push_back({g.contacts[static_cast<size_t>(kr)].right, contact_var[static_cast<size_t>(kr)] + 1, 2 * kr + 1});
+      }
+      for (size_t k : of_block[static_cast<size_t>(i)]) points.push_back({candidates[k].position, var[k], -1});
+      bool placed = false;
+      for (size_t a = 0; a < points.size() && !placed; ++a) {
+        for (size_t b = a + 1; b < points.size() && !placed; ++b) {
+          const Point* p1 = &points[a];
+          const Point* p2 = &points[b];
+          if (p1->position > p2->position) std::swap(p1, p2);
+          const double d1 = p1->position - c;
+          const double d2 = p2->position - c;
+          if (!(d2 - d1 > kContactTolerance)) continue;
+          const double f2 = (moment - load * d1) / (d2 - d1);
+          const double f1 = load - f2;
+          if (f1 < tol || f2 < tol) continue;
+          if (p1->end >= 0) f[static_cast<size_t>(p1->end)] = std::max(0.0, f1);
+          if (p2->end >= 0) f[static_cast<size_t>(p2->end)] = std::max(0.0, f2);
+          basis.push_back(p1->variable);
+          basis.push_back(p2->variable);
+          placed = true;
+        }
+      }
+      if (!placed) return {};
+    }
+  }
+  return basis;
+}
+
 void annotate_paper(const ContactGraph& g, const PredictOptions& options, Prediction& p) {
   p.balanced = true;
   if (two_point_certificate(g)) return;  // balanced: every fictitious force is zero
@@ -165,14 +226,18 @@ void annotate_paper(const ContactGraph& g, const PredictOptions& options, Predic
     problem.set(r, var[k], 1.0);
     problem.set(r + 1, var[k], f.position - g.centre(f.block));
   }
-  problem.basis_hint = hull_basis(g, {}, contact_var, [&](int block) {
-    std::pair<int, int> pair{-1, -1};
-    for (size_t k = 0; k < candidates.size(); ++k) {
-      if (candidates[k].block != block) continue;
-      (pair.first < 0 ? pair.first : pair.second) = var[k];
-    }
-    return pair;
-  });
+  problem.basis_hint = paper_primal_basis(g, candidates, var, contact_var);
+  problem.hint_primal_feasible = !problem.basis_hint.empty();
+  if (problem.basis_hint.empty()) {
+    problem.basis_hint = hull_basis(g, {}, contact_var, [&](int block) {
+      std::pair<int, int> pair{-1, -1};
+      for (size_t k = 0; k < candidates.size(); ++k) {
+        if (candidates[k].block != block) continue;
+        (pair.first < 0 ? pair.first : pair.second) = var[k];
+      }
+      return pair;
+    });
+  }
   const opt::SolveResult result = solve_lp(problem, options.solver, "paper annotator");
   p.balanced = true;
   for (size_t k = 0; k < candidates.size(); ++k) {

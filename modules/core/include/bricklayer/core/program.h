@@ -34,6 +34,7 @@ struct Problem {
   // Optional warm start for simplex backends: one variable per row to make basic (the others start at a
   // bound). Ignored unless it has exactly num_rows() entries; a singular hint is repaired by the backend.
   std::vector<int> basis_hint;
+  bool hint_primal_feasible = false;  // the hint's basic solution satisfies the bounds: start with primal simplex
 
   int num_variables() const { return static_cast<int>(cost.size()); }
   int num_rows() const { return static_cast<int>(row_lower.size()); }
