@@ -3,7 +3,13 @@
 
 #include <catch2/catch.hpp>
 
+#include <unistd.h>
+
 #include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "bricklayer/launcher/process.h"
 
 using namespace bricklayer::launcher;
 
@@ -66,4 +72,43 @@ TEST_CASE("profile mistakes are loud and name the place") {
         std::string::npos);
   CHECK(error_of(R"({"modules":[]})").find("nothing to launch") != std::string::npos);
   CHECK_THROWS_AS(load_profile("/nonexistent/profile.json"), ProfileError);
+}
+
+TEST_CASE("bricklayer-launch --check prints the plan, or names every missing binary with its build target") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("bricklayer-launch-check-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  auto run = [&](const std::string& profile_json) {
+    std::ofstream(dir / "p.json") << profile_json;
+    SpawnOptions o;
+    o.stdout_path = (dir / "out").string();
+    o.merge_stderr = true;
+    o.env = {"DISPLAY="};
+    auto p = Process::spawn({std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-launch", "--check", "--root",
+                             dir.string(), (dir / "p.json").string()},
+                            o);
+    auto st = p.wait_for(std::chrono::seconds(10));
+    REQUIRE(st);
+    std::ifstream in(dir / "out");
+    std::stringstream text;
+    text << in.rdbuf();
+    return std::make_pair(st->code, text.str());
+  };
+  auto [ok_code, ok_out] = run(R"({"headless_duration_s":7,"logger":{"file":"logs/x"},"modules":[
+      {"name":"a","command":["/bin/sleep","1"],"heartbeat":""}]})");
+  INFO(ok_out);
+  CHECK(ok_code == 0);
+  CHECK(ok_out.find("logger (no heartbeat, restart always): /usr/bin/lcm-logger --lcm-url=") != std::string::npos);
+  CHECK(ok_out.find("a (no heartbeat, restart always): /bin/sleep 1") != std::string::npos);
+  CHECK(ok_out.find("duration: 7 s") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "logs"));  // a check creates nothing
+
+  auto [bad_code, bad_out] = run(R"({"modules":[{"name":"v","command":["bricklayer-nope"]},
+      {"name":"w","command":["tools/missing.sh"]}]})");
+  INFO(bad_out);
+  CHECK(bad_code == 2);
+  CHECK(bad_out.find("module 'v' needs 'bricklayer-nope'") != std::string::npos);
+  CHECK(bad_out.find("--target bricklayer-nope") != std::string::npos);
+  CHECK(bad_out.find("module 'w' needs 'tools/missing.sh'") != std::string::npos);
+  fs::remove_all(dir);
 }

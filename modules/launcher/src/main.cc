@@ -38,6 +38,7 @@ int Main(int argc, char** argv) {
   flags.add("duration", "", "stop by itself after this many seconds (default: the profile's; 0 = until Ctrl-C)");
   flags.add("lcm-url", "", "LCM URL for every module (default: LCM_DEFAULT_URL, else host-only ttl=0)");
   flags.add("log-level", "info", "debug, info, warn or error");
+  flags.add_bool("check", "only check the profile: print what would be started, exit 2 if a binary is missing");
   if (!flags.parse(argc, argv)) return 0;
   log::set_level(log::parse_level(flags.get("log-level")));
 
@@ -81,6 +82,28 @@ int Main(int argc, char** argv) {
   if (flags.was_set("duration")) {
     options.duration_s = flags.get_double("duration");
     if (options.duration_s < 0) throw FlagError("--duration must be >= 0 seconds");
+  }
+
+  if (flags.get_bool("check")) {
+    try {
+      launcher::LaunchPlan plan = launcher::plan_launch(profile, options);
+      std::cout << "profile " << profile.name << ": " << plan.processes.size() << " processes, in start order\n";
+      for (const auto& [spec, command] : plan.processes) {
+        std::cout << "  " << spec.name << " (" << (spec.heartbeat.empty() ? "no heartbeat" : "heartbeat " + spec.heartbeat)
+                  << ", restart " << launcher::to_string(spec.restart) << "):";
+        for (const auto& a : command) std::cout << " " << a;
+        std::cout << "\n";
+      }
+      if (!plan.log_file.empty()) std::cout << "  bus log: " << plan.log_file << "\n";
+      std::cout << "  duration: ";
+      if (options.duration_s > 0)
+        std::cout << options.duration_s << " s\n";
+      else
+        std::cout << "until Ctrl-C\n";
+    } catch (const launcher::ProfileError& e) {
+      throw FlagError(e.what());
+    }
+    return 0;
   }
 
   std::unique_ptr<launcher::Supervisor> supervisor;

@@ -36,63 +36,73 @@ std::string strftime_now(const std::string& pattern) {
 
 }  // namespace
 
-Supervisor::Supervisor(Profile profile, SupervisorOptions options)
-    : profile_(std::move(profile)), options_(std::move(options)) {
+LaunchPlan plan_launch(const Profile& profile, const SupervisorOptions& options) {
+  LaunchPlan plan;
   std::vector<std::string> missing;
   auto resolve = [&](const std::string& who, std::vector<std::string> argv) {
-    std::string path = find_program(argv[0], options_.root, options_.bin_dirs);
+    std::string path = find_program(argv[0], options.root, options.bin_dirs);
     if (path.empty()) {
       std::string where;
-      for (const auto& d : options_.bin_dirs) where += d + ", ";
+      for (const auto& d : options.bin_dirs) where += d + ", ";
       missing.push_back("module '" + who + "' needs '" + argv[0] + "', which was not found (looked in " + where +
                         "then PATH; not built yet? cmake --build " +
-                        (options_.bin_dirs.empty() ? std::string("build")
-                                                   : fs::path(options_.bin_dirs.front()).parent_path().string()) +
-                        " --target " +
-                        fs::path(argv[0]).filename().string() + ")");
+                        (options.bin_dirs.empty() ? std::string("build")
+                                                  : fs::path(options.bin_dirs.front()).parent_path().string()) +
+                        " --target " + fs::path(argv[0]).filename().string() + ")");
     }
     argv[0] = path;
     return argv;
   };
-
-  if (profile_.logger) {
-    const LoggerSpec& l = *profile_.logger;
+  if (profile.logger) {
+    const LoggerSpec& l = *profile.logger;
     std::string file = strftime_now(l.file);
-    fs::path full = fs::path(file).is_absolute() ? fs::path(file) : fs::path(options_.root) / file;
-    std::error_code ec;
-    fs::create_directories(full.parent_path(), ec);
-    if (ec) throw ProfileError("cannot create the log directory " + full.parent_path().string() + ": " + ec.message());
+    fs::path full = fs::path(file).is_absolute() ? fs::path(file) : fs::path(options.root) / file;
     // lcm-logger 1.3.1: --lcm-url=URL (the -l short form is broken); -i and --rotate exclude each other.
-    std::vector<std::string> argv = {"lcm-logger", "--lcm-url=" + options_.lcm_url, "-q"};
+    std::vector<std::string> argv = {"lcm-logger", "--lcm-url=" + options.lcm_url, "-q"};
     char split[32];
     std::snprintf(split, sizeof(split), "%g", l.split_mb);
     if (l.rotate > 0) {
       argv.push_back("--rotate=" + std::to_string(l.rotate));
-      log_file_ = full.string() + ".0";
+      plan.log_file = full.string() + ".0";
     } else {
       argv.push_back("-i");
-      log_file_ = full.string() + ".*";
+      plan.log_file = full.string() + ".*";
     }
     argv.push_back(std::string("--split-mb=") + split);
     argv.push_back(full.string());
-    Managed m;
-    m.spec.name = "logger";
-    m.spec.heartbeat = "";
-    m.spec.restart = RestartPolicy::kAlways;
-    m.argv = resolve("logger", argv);
-    managed_.push_back(std::move(m));
+    plan.log_dir = full.parent_path().string();
+    ModuleSpec spec;
+    spec.name = "logger";
+    spec.heartbeat = "";
+    spec.restart = RestartPolicy::kAlways;
+    plan.processes.push_back({spec, resolve("logger", argv)});
   }
-  for (const auto& spec : profile_.modules) {
-    Managed m;
-    m.spec = spec;
-    const auto& cmd = (options_.display && !spec.command_with_display.empty()) ? spec.command_with_display : spec.command;
-    m.argv = resolve(spec.name, cmd);
-    managed_.push_back(std::move(m));
+  for (const auto& spec : profile.modules) {
+    const auto& cmd = (options.display && !spec.command_with_display.empty()) ? spec.command_with_display : spec.command;
+    plan.processes.push_back({spec, resolve(spec.name, cmd)});
   }
   if (!missing.empty()) {
-    std::string msg = "profile " + profile_.name + " cannot start:";
+    std::string msg = "profile " + profile.name + " cannot start:";
     for (const auto& line : missing) msg += "\n  " + line;
     throw ProfileError(msg);
+  }
+  return plan;
+}
+
+Supervisor::Supervisor(Profile profile, SupervisorOptions options)
+    : profile_(std::move(profile)), options_(std::move(options)) {
+  LaunchPlan plan = plan_launch(profile_, options_);
+  log_file_ = plan.log_file;
+  if (!plan.log_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(plan.log_dir, ec);
+    if (ec) throw ProfileError("cannot create the log directory " + plan.log_dir + ": " + ec.message());
+  }
+  for (auto& [spec, argv] : plan.processes) {
+    Managed m;
+    m.spec = spec;
+    m.argv = argv;
+    managed_.push_back(std::move(m));
   }
   char host[256] = {0};
   gethostname(host, sizeof(host) - 1);

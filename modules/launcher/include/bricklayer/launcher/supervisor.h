@@ -26,6 +26,20 @@ struct SupervisorOptions {
   bool display = false;               // use command_with_display where a profile gives one
 };
 
+// What a profile would start on this host: every process (logger first) with its resolved command line.
+struct LaunchPlan {
+  struct Entry {
+    ModuleSpec spec;
+    std::vector<std::string> argv;
+  };
+  std::vector<Entry> processes;
+  std::string log_file;  // "" without a logger
+  std::string log_dir;
+};
+
+// Resolves every program; throws ProfileError naming each one that is missing (and the build target).
+LaunchPlan plan_launch(const Profile& profile, const SupervisorOptions& options);
+
 class Supervisor {
  public:
   // Resolves every program first; throws ProfileError naming each one that is missing, before
