@@ -1,0 +1,279 @@
+// NETNS, real processes: hostile-but-decodable (and some undecodable) messages on every channel each
+// process listens to. Every one must be a counted error in the process's heartbeat, the process must
+// keep running (same pid, heartbeats continue), and it must not answer a hostile input as if it were
+// a measurement. Covers vision, prediction, projection (headless), planner and calibrate --serve.
+#include <catch2/catch.hpp>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+
+#include "bricklayer/calibration_t.hpp"
+#include "bricklayer/command_t.hpp"
+#include "bricklayer/image_t.hpp"
+#include "bricklayer/launcher/process.h"
+#include "bricklayer/prediction_t.hpp"
+#include "bricklayer/stack_t.hpp"
+#include "reliability_test_util.h"
+
+using namespace bricklayer;
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct Hostile {
+  std::string what;
+  std::string channel;
+  std::vector<uint8_t> bytes;
+  bool must_count = true;  // false: a field this process does not use; it must only survive it
+};
+
+Hostile unused(Hostile h) {
+  h.must_count = false;
+  return h;
+}
+
+stack_t good_stack(int n, int64_t frame) {
+  stack_t s{};
+  s.utime = 1000 + frame;
+  s.frame_number = frame;
+  s.block_length = 1.0;
+  s.block_height = 1.0 / 3.0;
+  s.table_edge = 0.0;
+  s.status = stack_t::STATUS_OK;
+  for (int i = 0; i < n; ++i) {
+    block_t b{};
+    b.id = i;
+    b.row = i;
+    b.x = -0.5 + 0.1 * i;
+    b.confidence = 1.0;
+    s.blocks.push_back(b);
+  }
+  s.num_blocks = n;
+  return s;
+}
+
+// Overwrites the big-endian int32 that follows `offset` bytes of the encoded message (after the
+// 8-byte fingerprint) -- a length field the sender lies about.
+std::vector<uint8_t> patch_i32(std::vector<uint8_t> bytes, size_t offset, int32_t value) {
+  const uint32_t v = static_cast<uint32_t>(value);
+  const uint8_t be[4] = {uint8_t(v >> 24), uint8_t(v >> 16), uint8_t(v >> 8), uint8_t(v)};
+  std::memcpy(bytes.data() + 8 + offset, be, 4);
+  return bytes;
+}
+
+std::vector<Hostile> hostile_stacks() {
+  const std::string ch = channel(kStackChannel);
+  std::vector<Hostile> out;
+  // num_blocks says 2^31-1 but three blocks follow: undecodable, must not allocate 2^31 blocks.
+  // Offset of num_blocks: utime, frame_number (16) + 3 doubles (24) + status (1).
+  out.push_back({"stack num_blocks 2^31-1 with 3 blocks", ch, test::encode_bytes(good_stack(3, 901))});
+  out.back().bytes = patch_i32(out.back().bytes, 41, std::numeric_limits<int32_t>::max());
+  out.push_back({"stack num_blocks -5", ch, patch_i32(test::encode_bytes(good_stack(3, 902)), 41, -5)});
+  auto nan_x = good_stack(4, 903);
+  nan_x.blocks[2].x = kNaN;
+  out.push_back({"stack NaN x", ch, test::encode_bytes(nan_x)});
+  auto neg_h = good_stack(3, 904);
+  neg_h.block_height = -1.0;
+  out.push_back({"stack negative block height", ch, test::encode_bytes(neg_h)});
+  auto inf_edge = good_stack(3, 905);
+  inf_edge.table_edge = std::numeric_limits<double>::infinity();
+  out.push_back({"stack infinite table edge", ch, test::encode_bytes(inf_edge)});
+  auto rows = good_stack(3, 906);
+  rows.blocks[1].row = std::numeric_limits<int32_t>::max();
+  out.push_back({"stack row 2^31-1", ch, test::encode_bytes(rows)});
+  return out;
+}
+
+std::vector<Hostile> hostile_predictions() {
+  const std::string ch = channel(kPredictionChannel);
+  std::vector<Hostile> out;
+  prediction_t p{};
+  p.frame_number = 911;
+  p.annotator = "exact";
+  p.solver = "clp";
+  p.balanced = true;
+  p.num_blocks = 2;
+  p.blocks.resize(2);
+  // num_blocks offset: utime, frame (16) + status (1) + error string (4+1) + balanced (1) + overhang (8)
+  // + score (4) + annotator (4+6) + solver (4+4) = 53.
+  out.push_back({"prediction num_blocks 2^31-1 with 2 blocks", ch,
+                 patch_i32(test::encode_bytes(p), 53, std::numeric_limits<int32_t>::max())});
+  auto nan = p;
+  nan.frame_number = 912;
+  nan.overhang = kNaN;
+  out.push_back({"prediction NaN overhang", ch, test::encode_bytes(nan)});
+  auto state = p;
+  state.frame_number = 913;
+  state.blocks[0].state = 77;
+  out.push_back({"prediction block state 77", ch, test::encode_bytes(state)});
+  auto status = p;
+  status.frame_number = 914;
+  status.status = -3;
+  out.push_back({"prediction status -3", ch, test::encode_bytes(status)});
+  return out;
+}
+
+image_t small_image(int64_t frame) {
+  image_t m{};
+  m.utime = 2000 + frame;
+  m.frame_number = frame;
+  m.width = 8;
+  m.height = 8;
+  m.format = image_t::FORMAT_GRAY8;
+  m.source = "hostile";
+  m.data.assign(64, 128);
+  m.size = 64;
+  return m;
+}
+
+std::vector<Hostile> hostile_images() {
+  const std::string ch = channel(kImageChannel);
+  std::vector<Hostile> out;
+  auto huge = small_image(921);
+  huge.width = 100000;
+  huge.height = 100000;
+  huge.format = image_t::FORMAT_BGR8;
+  out.push_back({"image 100000x100000 with 64 bytes", ch, test::encode_bytes(huge)});
+  auto overflow = small_image(922);
+  overflow.width = 65536;
+  overflow.height = 65536;  // width*height wraps to 0 in 32 bits
+  out.push_back({"image 65536x65536 (32-bit product wraps)", ch, test::encode_bytes(overflow)});
+  auto negative = small_image(923);
+  negative.width = -8;
+  out.push_back({"image negative width", ch, test::encode_bytes(negative)});
+  auto format = small_image(924);
+  format.format = 99;
+  out.push_back({"image unknown format", ch, test::encode_bytes(format)});
+  auto png = small_image(925);
+  png.format = image_t::FORMAT_PNG;  // 64 bytes of 0x80 are no PNG
+  out.push_back({"image PNG that is not a PNG", ch, test::encode_bytes(png)});
+  // size offset: utime, frame (16) + width, height, format (12) + source string (4 + 8).
+  out.push_back({"image size -1", ch, patch_i32(test::encode_bytes(small_image(926)), 40, -1)});
+  return out;
+}
+
+std::vector<Hostile> hostile_calibrations() {
+  const std::string ch = channel(kCalibrationChannel);
+  std::vector<Hostile> out;
+  calibration_t c{};
+  c.camera_width = 640;
+  c.camera_height = 480;
+  c.projector_width = 1024;
+  c.projector_height = 768;
+  c.camera_matrix[0] = kNaN;
+  out.push_back({"calibration NaN focal length", ch, test::encode_bytes(c)});
+  calibration_t n{};
+  n.camera_width = -640;
+  n.camera_height = 1 << 30;
+  out.push_back({"calibration negative / huge image size", ch, test::encode_bytes(n)});
+  return out;
+}
+
+std::vector<Hostile> hostile_commands() {
+  const std::string ch = channel(kCommandChannel);
+  std::vector<Hostile> out;
+  command_t c{};
+  c.command = command_t::SHOW_PATTERN;
+  c.pattern = 12345;
+  c.index = -7;
+  c.red = -300;
+  c.sequence = 931;
+  out.push_back({"command unknown pattern, negative index and colour", ch, test::encode_bytes(c)});
+  command_t u{};
+  u.command = 999;
+  u.sequence = 932;
+  out.push_back({"command 999", ch, test::encode_bytes(u)});
+  return out;
+}
+
+struct Case {
+  std::string module;
+  std::vector<std::string> argv;
+  std::vector<std::vector<Hostile>> inputs;
+};
+
+void run_case(const Case& c) {
+  INFO("module " << c.module);
+  launcher::SpawnOptions opts;
+  opts.env = {std::string("LCM_DEFAULT_URL=") + test::kTestUrl, "SDL_VIDEODRIVER=offscreen", "SDL_AUDIODRIVER=dummy"};
+  opts.stdout_path = fs::temp_directory_path() / ("bricklayer-hostile-" + c.module + "-" + std::to_string(::getpid()) + ".log");
+  opts.merge_stderr = true;
+  auto proc = launcher::Process::spawn(c.argv, opts);
+  test::Listener bus;
+  REQUIRE(bus.ok());
+  bus.listen(channel(kHeartbeatChannel));
+  heartbeat_t hb{};
+  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat(c.module, hb) && hb.pid == proc.pid(); }, 15s));
+  bus.pump(300ms);  // start-up settled (a calibration published at start, first frames)
+  REQUIRE(bus.last_heartbeat(c.module, hb));
+  // One message at a time, each followed by the next heartbeat (sent at least 100 ms after it, so the
+  // message has been handled): its error counter must have grown by at least one.
+  int64_t errors = hb.errors;
+  for (const auto& group : c.inputs) {
+    for (const auto& h : group) {
+      INFO(h.what);
+      bus.pump(20ms);
+      bus.messages.clear();
+      const auto sent_at = std::chrono::steady_clock::now();
+      bus.lcm().publish(h.channel, h.bytes.data(), static_cast<unsigned>(h.bytes.size()));
+      heartbeat_t after{};
+      REQUIRE(bus.pump_until([&] {
+        for (const auto& m : bus.on(channel(kHeartbeatChannel)))
+          if (m.when > sent_at + 100ms && test::decode(m.bytes, after) && after.module == c.module) return true;
+        return false;
+      }, 5s));
+      REQUIRE(proc.running());
+      CHECK(after.pid == proc.pid());
+      if (h.must_count) CHECK(after.errors > errors);
+      errors = after.errors;
+    }
+  }
+  REQUIRE(proc.running());
+  proc.stop(5s);
+}
+
+}  // namespace
+
+TEST_CASE("prediction counts every hostile stack as an error and keeps running") {
+  run_case({"prediction", {test::bin("bricklayer-prediction"), "--log-level", "error"}, {hostile_stacks()}});
+}
+
+TEST_CASE("vision counts every hostile frame and calibration as an error and keeps running") {
+  run_case({"vision", {test::bin("bricklayer-vision"), "--log-level", "error"}, {hostile_images(), hostile_calibrations()}});
+}
+
+TEST_CASE("projection counts every hostile stack, prediction, calibration and command it uses as an error") {
+  // Projection computes the overhang from the stack, shows any non-OK status as "no verdict", and
+  // leaves command codes it does not know to other modules: those three only have to be survived.
+  auto predictions = hostile_predictions();
+  for (auto& h : predictions)
+    if (h.what == "prediction NaN overhang" || h.what == "prediction status -3") h = unused(h);
+  auto commands = hostile_commands();
+  commands[1] = unused(commands[1]);
+  run_case({"projection",
+            {test::bin("bricklayer-projection"), "--headless", "--log-level", "error"},
+            {hostile_stacks(), predictions, hostile_calibrations(), commands}});
+}
+
+TEST_CASE("planner counts every hostile stack it plans with as an error and survives the rest") {
+  // The planner only uses a prediction that answers the stack it holds (these answer none). It keeps a
+  // stack with a block in row 2^31-1 without complaint (prediction rejects it); a hint is then asked
+  // for on that stack, which must not crash or allocate rows up to 2^31.
+  auto stacks = hostile_stacks();
+  for (auto& h : stacks)
+    if (h.what == "stack row 2^31-1") h = unused(h);
+  command_t hint{};
+  hint.command = command_t::REQUEST_HINT;
+  hint.sequence = 940;
+  stacks.push_back(unused({"REQUEST_HINT after the row 2^31-1 stack", channel(kCommandChannel), test::encode_bytes(hint)}));
+  auto predictions = hostile_predictions();
+  for (auto& h : predictions) h = unused(h);
+  run_case({"planner", {test::bin("bricklayer-planner"), "--log-level", "error"}, {stacks, predictions}});
+}
