@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <set>
 
 #include "bricklayer/common/lcm_url.h"
 #include "bricklayer/launcher/process.h"
@@ -79,4 +80,101 @@ TEST_CASE("every process refuses a routed URL (ttl > 1) with a clear error and a
       CHECK(env.status.signal == 0);
     }
   }
+}
+
+namespace {
+
+std::string netns_of(pid_t pid) {
+  std::error_code ec;
+  return fs::read_symlink("/proc/" + std::to_string(pid) + "/ns/net", ec).string();
+}
+
+void sh(const std::string& command) {
+  INFO(command);
+  auto p = launcher::Process::spawn({"/bin/sh", "-c", command});
+  auto st = p.wait_for(10s);
+  REQUIRE(st);
+  REQUIRE(st->clean());
+}
+
+std::string work_dir() { return fs::temp_directory_path() / ("bricklayer-url-" + std::to_string(::getpid())); }
+
+// Starts every binary in the namespace of `anchor` with the given environment; returns the processes.
+std::vector<launcher::Process> start_all(const std::string& anchor, const std::vector<std::string>& env) {
+  std::vector<launcher::Process> out;
+  for (const auto& base : kBinaries) {
+    std::vector<std::string> argv = {"/usr/bin/nsenter", "-t", anchor, "-n", test::bin(base[0])};
+    argv.insert(argv.end(), base.begin() + 1, base.end());
+    argv.insert(argv.end(), {"--log-level", "error"});
+    launcher::SpawnOptions o;
+    o.env = env;
+    o.env.push_back("SDL_VIDEODRIVER=offscreen");
+    o.env.push_back("SDL_AUDIODRIVER=dummy");
+    o.cwd = work_dir();  // calibrate --serve reads calibration.json here
+    o.stdout_path = fs::temp_directory_path() / ("bricklayer-url-" + base[0] + "-" + std::to_string(::getpid()) + ".log");
+    o.merge_stderr = true;
+    out.push_back(launcher::Process::spawn(argv, o));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("with the default URL no process is heard on another host, with ttl=1 every one is") {
+  // This namespace is the "other host"; a second namespace joined by a veth pair runs every binary.
+  ::unsetenv("LCM_DEFAULT_URL");
+  fs::create_directories(work_dir());
+  {
+    launcher::SpawnOptions o;
+    o.cwd = work_dir();
+    auto w = launcher::Process::spawn({test::bin("bricklayer-calibrate"), "--write-default", "--output=calibration.json"}, o);
+    auto st = w.wait_for(10s);
+    REQUIRE(st);
+    REQUIRE(st->clean());
+  }
+  auto anchor = launcher::Process::spawn({"/usr/bin/unshare", "-n", "/bin/sleep", "300"});
+  const std::string mine = netns_of(::getpid());
+  for (int i = 0; i < 400 && (netns_of(anchor.pid()).empty() || netns_of(anchor.pid()) == mine); ++i) usleep(5000);
+  REQUIRE(netns_of(anchor.pid()) != mine);
+  const std::string pid = std::to_string(anchor.pid());
+  sh("ip link add bl-url-a type veth peer name bl-url-b");
+  sh("ip addr add 10.203.0.1/24 dev bl-url-a && ip link set bl-url-a multicast on && ip link set bl-url-a up"
+     " && ip route replace 224.0.0.0/4 dev bl-url-a");
+  sh("ip link set bl-url-b netns " + pid);
+  sh("/usr/bin/nsenter -t " + pid + " -n sh -c 'ip link set lo up && ip addr add 10.203.0.2/24 dev bl-url-b && "
+     "ip link set bl-url-b multicast on && ip link set bl-url-b up && ip route add 224.0.0.0/4 dev bl-url-b'");
+
+  test::Listener other_host("udpm://239.255.76.67:7667?ttl=1");
+  REQUIRE(other_host.ok());
+  other_host.listen(channel(kHeartbeatChannel));
+  auto modules_heard = [&] {
+    std::set<std::string> heard;
+    heartbeat_t hb{};
+    for (const auto& m : other_host.on(channel(kHeartbeatChannel)))
+      if (test::decode(m.bytes, hb)) heard.insert(hb.module);
+    return heard;
+  };
+
+  {
+    auto procs = start_all(pid, {});  // no --lcm-url, no LCM_DEFAULT_URL: the built-in default
+    other_host.pump(3500ms);          // every module heartbeats once a second
+    for (size_t i = 0; i < procs.size(); ++i) {
+      INFO(kBinaries[i][0] << ": " << test::slurp(fs::temp_directory_path() / ("bricklayer-url-" + kBinaries[i][0] + "-" +
+                                                                              std::to_string(::getpid()) + ".log")));
+      CHECK(procs[i].running());
+    }
+    CHECK(modules_heard().empty());
+    for (auto& p : procs) p.stop(5s);
+  }
+  {
+    // Positive control: the same processes on the LAN URL are heard (the veth and routes work).
+    auto procs = start_all(pid, {"LCM_DEFAULT_URL=udpm://239.255.76.67:7667?ttl=1"});
+    const bool all = other_host.pump_until([&] { return modules_heard().size() == kBinaries.size(); }, 10s);
+    std::string heard;
+    for (const auto& m : modules_heard()) heard += m + " ";
+    INFO("heard: " << heard);
+    CHECK(all);
+    for (auto& p : procs) p.stop(5s);
+  }
+  fs::remove_all(work_dir());
 }
