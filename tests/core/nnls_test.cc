@@ -120,3 +120,35 @@ TEST_CASE("NNLS warm starts: any initial passive set gives the optimum (sparse, 
     CHECK((A * r.x - b).squaredNorm() == Approx(brute_force_objective(A, b)).margin(1e-9));
   }
 }
+
+TEST_CASE("NNLS on larger banded problems satisfies the optimality (KKT) conditions") {
+  // Long runs add and remove hundreds of indices, which widens the factor's bands and triggers rebuilds.
+  std::mt19937 rng(4242);
+  std::normal_distribution<double> normal;
+  for (int trial = 0; trial < 12; ++trial) {
+    const int m = 150;
+    const int n = 260;
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, n);
+    for (int j = 0; j < n; ++j) {
+      const int centre = (j * m) / n;
+      for (int i = std::max(0, centre - 2); i <= std::min(m - 1, centre + 2); ++i) A(i, j) = normal(rng);
+    }
+    Eigen::VectorXd b(m);
+    for (int i = 0; i < m; ++i) b(i) = normal(rng) + (trial % 2 ? 2.0 : 0.0);
+    std::vector<int> initial;
+    for (int j = 0; j < n; j += 2) initial.push_back(j);
+    const Eigen::SparseMatrix<double> S = A.sparseView();
+    const NnlsResult r = solve_nnls(S, b, 0, trial % 3 == 0 ? std::vector<int>{} : initial);
+    INFO("trial " << trial << ", iterations " << r.iterations);
+    REQUIRE(r.converged);
+    const Eigen::VectorXd w = A.transpose() * (b - A * r.x);
+    CHECK(r.x.minCoeff() >= 0.0);
+    for (int j = 0; j < n; ++j) {
+      if (r.x(j) > 0.0) {
+        CHECK(std::abs(w(j)) < 1e-8);  // stationary on the positive set
+      } else {
+        CHECK(w(j) < 1e-8);  // no descent direction into the orthant
+      }
+    }
+  }
+}

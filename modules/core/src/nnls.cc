@@ -107,6 +107,30 @@ class PassiveCholesky {
     for (int t = k; t < rows; ++t) position_[static_cast<size_t>(passive_[static_cast<size_t>(t)])] = t;
   }
 
+  // Number of stored entries of L (sum of the bands).
+  size_t cells() const {
+    size_t total = 0;
+    for (const auto& row : rows_) total += row.size();
+    return total;
+  }
+
+  // Refactors with the passive set in ascending column order (the caller's natural, banded order): indices
+  // appended by the iterations and Givens removals widen the bands over time. Returns the indices that could
+  // not be re-added (numerically dependent), which are no longer passive.
+  std::vector<int> rebuild() {
+    std::vector<int> order = passive_;
+    std::sort(order.begin(), order.end());
+    for (int j : passive_) position_[static_cast<size_t>(j)] = -1;
+    passive_.clear();
+    rows_.clear();
+    start_.clear();
+    std::vector<int> dropped;
+    for (int j : order) {
+      if (!add(j)) dropped.push_back(j);
+    }
+    return dropped;
+  }
+
   // Solves gram_PP s = rhs_P with two banded triangular solves.
   Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const {
     const int p = size();
@@ -193,6 +217,7 @@ NnlsResult lawson_hanson(const Ops& ops, int max_iterations, const std::vector<i
     }
     w = ops.gradient(x);
   }
+  size_t rebuild_at = 3 * chol.cells() + 64 * static_cast<size_t>(chol.size()) + 1024;
 
   while (result.iterations < max_iterations) {
     int best = -1;
@@ -264,6 +289,13 @@ NnlsResult lawson_hanson(const Ops& ops, int max_iterations, const std::vector<i
       s = chol.solve(atb);
     }
     for (int k = 0; k < chol.size(); ++k) x(chol.indices()[static_cast<size_t>(k)]) = std::max(0.0, s(k));
+    if (chol.cells() > rebuild_at) {
+      for (int j : chol.rebuild()) {
+        x(j) = 0.0;
+        in_passive[static_cast<size_t>(j)] = 0;
+      }
+      rebuild_at = 3 * chol.cells() + 64 * static_cast<size_t>(chol.size()) + 1024;
+    }
     w = ops.gradient(x);
   }
   return result;
