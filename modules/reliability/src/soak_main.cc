@@ -149,6 +149,7 @@ class Soak {
     }
     while (since(t0_) < t_end + 2.4) lcm_->handleTimeout(20);  // drain: no new frames, last answers and heartbeats
     for (auto& [name, w] : watch_) w.mem_end = read_memory(w.pid);
+    sample_udp_drops();
     launch_.stop(std::chrono::seconds(15));
     return report();
   }
@@ -240,6 +241,27 @@ class Soak {
     }
   }
 
+  // Datagrams the kernel dropped because a receiver's buffer was full (/proc/net/udp "drops", every
+  // socket on the bus port in this namespace): the only way a message can go missing on one host.
+  void sample_udp_drops() {
+    std::ifstream udp("/proc/net/udp");
+    std::string line;
+    std::getline(udp, line);
+    const std::string port = url_.substr(url_.rfind(':') + 1, 4);
+    char port_hex[8];
+    std::snprintf(port_hex, sizeof port_hex, ":%04X", std::stoi(port));
+    while (std::getline(udp, line)) {
+      std::istringstream f(line);
+      std::string sl, local;
+      f >> sl >> local;
+      if (local.size() < 5 || local.substr(local.size() - 5) != port_hex) continue;
+      std::string field, last;
+      while (f >> field) last = field;
+      ++udp_sockets_;
+      udp_drops_ += std::stol(last);
+    }
+  }
+
   static int64_t backlog(const heartbeat_t& h) { return h.received - h.published - h.dropped; }
 
   void OnHeartbeat(const lcm::ReceiveBuffer*, const std::string&, const heartbeat_t* hb) {
@@ -304,6 +326,7 @@ class Soak {
   bool killing_ = false;
   std::set<int64_t> seen_predictions_;
   std::vector<std::pair<double, double>> ages_;  // (seconds since start, age of the prediction in ms)
+  long udp_sockets_ = 0, udp_drops_ = 0;
 };
 
 int Soak::report() {
@@ -398,6 +421,8 @@ int Soak::report() {
   std::sort(times.begin(), times.end());
   double worst_gap = 0;
   for (size_t i = 1; i < times.size(); ++i) worst_gap = std::max(worst_gap, (times[i] - times[i - 1]) / 1e6);
+  std::cout << "udp: " << udp_drops_ << " datagrams dropped by the kernel (receive buffers full) over " << udp_sockets_
+            << " sockets on the bus port, sampled before the stop\n";
   int64_t missing = 0;
   std::string missing_list;
   for (int64_t f : seen_predictions_) {
