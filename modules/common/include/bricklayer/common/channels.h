@@ -18,6 +18,7 @@ inline constexpr const char* kRoundChannel = "BL_ROUND";            // round_t, 
 inline constexpr const char* kProjectorChannel = "BL_PROJECTOR";    // projector_state_t, projection -> simcam, calibration
 inline constexpr const char* kPreviewChannel = "BL_PREVIEW";        // collapse_preview_t, planner
 inline constexpr const char* kHintChannel = "BL_HINT";              // hint_t, planner
+inline constexpr const char* kTruthChannel = "BL_TRUTH";            // stack_t, simcam: the true stack of each frame
 
 // The channel name with the deployment's prefix (environment BRICKLAYER_CHANNEL_PREFIX, default none).
 std::string channel(const char* name);
