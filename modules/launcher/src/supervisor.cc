@@ -282,23 +282,28 @@ void Supervisor::shutdown() {
   auto is_logger = [this](const Managed* m) { return profile_.logger && m == &managed_.front(); };
   for (Managed* m : order)
     if (!is_logger(m)) m->proc.signal(SIGTERM);
+  // Keep listening while they stop, so the summary has every module's final heartbeat.
   auto until = Clock::now() + deadline;
+  auto any_running = [&] {
+    return std::any_of(order.begin(), order.end(), [&](Managed* m) { return !is_logger(m) && m->proc.running(); });
+  };
+  while (any_running() && Clock::now() < until) module_->lcm().handleTimeout(10);
+  for (Managed* m : order) {
+    if (is_logger(m) || !m->proc.running()) continue;
+    say(m->spec.name + " ignored SIGTERM for " + format_seconds(profile_.stop_timeout_s) + " s: SIGKILL");
+    m->proc.signal(SIGKILL);
+    m->proc.wait_for(std::chrono::seconds(5));
+  }
+  for (int i = 0; i < 30 && module_->lcm().handleTimeout(10) > 0; ++i) {
+  }
   for (Managed* m : order) {
     if (is_logger(m)) continue;
-    auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now());
-    auto st = m->proc.wait_for(std::max(left, std::chrono::milliseconds(0)));
-    if (!st) {
-      say(m->spec.name + " ignored SIGTERM for " + format_seconds(profile_.stop_timeout_s) + " s: SIGKILL");
-      m->proc.signal(SIGKILL);
-      st = m->proc.wait_for(std::chrono::seconds(5));
-    }
-    if (st) m->last_exit = st->describe();
+    if (auto st = m->proc.exit_status()) m->last_exit = st->describe();
     m->state = State::kStopped;
   }
   // Let the logger write the last heartbeats before it goes.
   for (Managed* m : order) {
     if (!is_logger(m)) continue;
-    module_->lcm().handleTimeout(200);
     ExitStatus st = m->proc.stop(deadline);
     m->last_exit = st.describe();
     m->state = State::kStopped;
