@@ -439,18 +439,25 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
   std::mt19937_64 rng(options.seed);
   std::vector<OverhangStack> best_per_n;
   std::vector<OverhangStack> beam;
-  {
+  if (options.resume_from.empty()) {
     OverhangStack one;
     one.blocks = {{0, -0.5}};
     one.overhang = 0.5;
-    beam.push_back(one);
     best_per_n.push_back(one);
-    if (progress) progress(1, one);
+  } else {
+    best_per_n = options.resume_from;
   }
-  for (int n = 2; n <= n_max; ++n) {
+  for (size_t k = 0; k < best_per_n.size(); ++k) {
+    if (best_per_n[k].blocks.size() != k + 1)
+      throw std::invalid_argument("search_best_overhang: resume_from[" + std::to_string(k) + "] does not have " +
+                                  std::to_string(k + 1) + " blocks");
+    if (progress) progress(static_cast<int>(k + 1), best_per_n[k]);
+  }
+  beam.push_back(best_per_n.back());
+  for (int n = static_cast<int>(best_per_n.size()) + 1; n <= n_max; ++n) {
     std::map<std::string, OverhangStack> found;
     auto consider = [&](const std::vector<PlacedBlock>& seed, bool far_from_balanced = false) {
-      auto result = optimise_layout(seed, rightmost(seed), 1e-9, far_from_balanced);
+      auto result = optimise_layout(seed, rightmost(seed), options.tolerance, far_from_balanced);
       if (!result) return;
       auto [it, inserted] = found.emplace(shape_key(*result), *result);
       if (!inserted && result->overhang > it->second.overhang) it->second = *result;
@@ -479,7 +486,7 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
     // Polish the best: positions moved, so rebuild the contact set from them and optimise again.
     for (size_t i = 0; i < std::min<size_t>(ranked.size(), options.beam); ++i)
       for (int round = 0; round < 3; ++round) {
-        auto again = optimise_layout(ranked[i].blocks, rightmost(ranked[i].blocks));
+        auto again = optimise_layout(ranked[i].blocks, rightmost(ranked[i].blocks), options.tolerance);
         if (!again || again->overhang <= ranked[i].overhang + 1e-9) break;
         ranked[i] = *again;
       }

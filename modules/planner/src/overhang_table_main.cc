@@ -26,6 +26,9 @@ int Main(int argc, char** argv) {
   flags.add("seed", "1", "random seed of the restarts");
   flags.add("table", "best_overhang.json", "output: {\"n\": overhang} in block lengths");
   flags.add("stacks", "best_overhang_stacks.json", "output: the stacks ({\"n\": [{\"row\", \"x\"}...]})");
+  flags.add("tolerance", "1e-9", "largest accepted constraint residual of an optimised stack");
+  flags.add("resume", "", "stacks file of an earlier run: keep its results for n = 1..--resume-n and continue");
+  flags.add("resume-n", "0", "with --resume: how many of its results to keep");
   flags.add("log-level", "info", "debug, info, warn or error");
   if (!flags.parse(argc, argv)) return 0;
   log::set_level(log::parse_level(flags.get("log-level")));
@@ -36,6 +39,23 @@ int Main(int argc, char** argv) {
   options.perturbations = static_cast<int>(flags.get_int("perturbations"));
   options.seed = static_cast<uint64_t>(flags.get_int("seed"));
   if (options.beam < 1 || options.perturbations < 0) throw FlagError("--beam must be >= 1, --perturbations >= 0");
+  options.tolerance = flags.get_double("tolerance");
+  if (!(options.tolerance > 0 && options.tolerance < 1e-3)) throw FlagError("--tolerance must be in (0, 1e-3)");
+  if (!flags.get("resume").empty()) {
+    std::ifstream in(flags.get("resume"));
+    if (!in) throw FlagError("--resume: cannot read " + flags.get("resume"));
+    const nlohmann::json old = nlohmann::json::parse(in);
+    const int64_t keep = flags.get_int("resume-n");
+    if (keep < 1 || keep >= max_n) throw FlagError("--resume-n must be between 1 and --max-n - 1");
+    for (int n = 1; n <= keep; ++n) {
+      const auto& e = old.at(std::to_string(n));
+      planner::OverhangStack s;
+      s.overhang = e.at("overhang").get<double>();
+      s.residual = e.at("residual").get<double>();
+      for (const auto& b : e.at("blocks")) s.blocks.push_back({b.at("row").get<int>(), b.at("x").get<double>()});
+      options.resume_from.push_back(std::move(s));
+    }
+  }
 
   nlohmann::ordered_json table = nlohmann::ordered_json::object();
   nlohmann::ordered_json stacks = nlohmann::ordered_json::object();

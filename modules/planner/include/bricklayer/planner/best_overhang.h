@@ -45,6 +45,10 @@ struct OverhangSearchOptions {
   int perturbations = 4;  // seeded random restarts around the best layouts per n
   int wall_seeds = 6;     // seeded brick-wall layouts with random row profiles per n (n >= 8)
   uint64_t seed = 1;
+  double tolerance = 1e-9;  // largest accepted constraint residual
+  // Results already known for n = 1..k (e.g. from an earlier run's stacks file): the search continues at
+  // n = k+1 with the last of them as its only layout.
+  std::vector<OverhangStack> resume_from;
 };
 
 // Best stacks for n = 1..n_max (index n-1). progress(n, best) is called after each n when given.
