@@ -80,6 +80,16 @@ Accelerations by_nnls(const ContactGraph& g, const ContactRows& c, const std::ve
   const double inv_sqrt_inertia = 1.0 / std::sqrt(inertia);
   // A = M^-1/2 J^T (variables x contact ends), b = -M^1/2 z0 = (1, 0, 1, 0, ...).
   const int m = static_cast<int>(c.rows.size());
+  if (m == 0) {  // nothing supports any free block: free fall
+    Accelerations fall;
+    fall.a.assign(g.size(), 0.0);
+    fall.alpha.assign(g.size(), 0.0);
+    fall.force.assign(2 * g.contacts.size(), 0.0);
+    for (size_t i = 0; i < g.size(); ++i) {
+      if (c.var[i] >= 0) fall.a[i] = -1.0;
+    }
+    return fall;
+  }
   Eigen::SparseMatrix<double> A(c.num_vars, m);
   A.reserve(Eigen::VectorXi::Constant(m, 4));
   for (int k = 0; k < m; ++k) {
