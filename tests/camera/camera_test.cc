@@ -1,0 +1,144 @@
+// bricklayer-camera as a real process on the real bus (NETNS), reading a folder of images and a video
+// file this test writes (no camera exists on a CI machine); missing sources fail loudly.
+#include <catch2/catch.hpp>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "bricklayer/camera/frame_source.h"
+#include "bricklayer/common/channels.h"
+#include "bricklayer/common/module.h"
+#include "bricklayer/image_t.hpp"
+
+using namespace bricklayer;
+namespace fs = std::filesystem;
+
+namespace {
+const std::string kBin = std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-camera";
+constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
+
+pid_t spawn(std::vector<std::string> args) {
+  pid_t pid = fork();
+  if (pid == 0) {
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+int wait_exit(pid_t pid, int seconds) {
+  for (int i = 0; i < seconds * 50; ++i) {
+    int status = 0;
+    if (waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    usleep(20000);
+  }
+  kill(pid, SIGKILL);
+  waitpid(pid, nullptr, 0);
+  return -2;
+}
+
+// Frame k: a grey level that encodes k, so order and identity can be checked after JPEG.
+cv::Mat numbered_frame(int k) { return cv::Mat(120, 160, CV_8UC3, cv::Scalar::all(20 + 40 * k)); }
+
+fs::path temp_dir(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / ("bricklayer-camera-test-" + name + "-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::vector<image_t> collect(Module& m, std::vector<image_t>& frames, size_t want, double seconds) {
+  auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (frames.size() < want && std::chrono::steady_clock::now() < end) m.lcm().handleTimeout(20);
+  return frames;
+}
+}  // namespace
+
+TEST_CASE("a folder of images is published in name order with counting frame numbers") {
+  fs::path dir = temp_dir("folder");
+  for (int k = 0; k < 5; ++k) cv::imwrite((dir / ("f" + std::to_string(k) + ".png")).string(), numbered_frame(k));
+  std::ofstream(dir / "notes.txt") << "not an image";
+  Module m("test", kUrl);
+  std::vector<image_t> frames;
+  m.subscribe<image_t>(channel(kImageChannel), [&](const image_t& im) { frames.push_back(im); });
+  pid_t pid = spawn({kBin, "--images", dir.string(), "--fps", "20", "--format", "png", "--lcm-url", kUrl});
+  collect(m, frames, 5, 10);
+  CHECK(wait_exit(pid, 5) == 0);  // exits by itself at the end of the folder
+  REQUIRE(frames.size() == 5);
+  for (int k = 0; k < 5; ++k) {
+    CHECK(frames[k].frame_number == k);
+    CHECK(frames[k].format == image_t::FORMAT_PNG);
+    cv::Mat bgr = cv::imdecode(frames[k].data, cv::IMREAD_COLOR);
+    REQUIRE(bgr.cols == 160);
+    CHECK(bgr.at<cv::Vec3b>(60, 80)[1] == 20 + 40 * k);
+    if (k > 0) CHECK(frames[k].utime > frames[k - 1].utime);
+  }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("a video file is published frame by frame as JPEG") {
+  fs::path dir = temp_dir("video");
+  std::string path = (dir / "clip.avi").string();
+  {
+    cv::VideoWriter writer(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25, cv::Size(160, 120));
+    REQUIRE(writer.isOpened());
+    for (int k = 0; k < 6; ++k) writer.write(numbered_frame(k));
+  }
+  Module m("test", kUrl);
+  std::vector<image_t> frames;
+  m.subscribe<image_t>(channel(kImageChannel), [&](const image_t& im) { frames.push_back(im); });
+  pid_t pid = spawn({kBin, "--video", path, "--fps", "30", "--lcm-url", kUrl});
+  collect(m, frames, 6, 10);
+  CHECK(wait_exit(pid, 5) == 0);
+  REQUIRE(frames.size() == 6);
+  for (int k = 0; k < 6; ++k) {
+    CHECK(frames[k].frame_number == k);
+    CHECK(frames[k].format == image_t::FORMAT_JPEG);
+    cv::Mat bgr = cv::imdecode(frames[k].data, cv::IMREAD_COLOR);
+    REQUIRE_FALSE(bgr.empty());
+    CHECK(std::abs(bgr.at<cv::Vec3b>(60, 80)[1] - (20 + 40 * k)) <= 6);  // JPEG twice: close, not exact
+  }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("missing sources and bad flags are clear errors with a non-zero exit") {
+  CHECK(wait_exit(spawn({kBin, "--device", "/dev/video-none", "--lcm-url", kUrl}), 10) == 1);
+  CHECK(wait_exit(spawn({kBin, "--video", "/nonexistent.avi", "--lcm-url", kUrl}), 10) == 1);
+  CHECK(wait_exit(spawn({kBin, "--images", "/nonexistent-dir", "--lcm-url", kUrl}), 10) == 1);
+  CHECK(wait_exit(spawn({kBin, "--images", "/tmp", "--video", "x.avi", "--lcm-url", kUrl}), 10) == 2);
+  CHECK(wait_exit(spawn({kBin, "--images", "/tmp", "--format", "gif", "--lcm-url", kUrl}), 10) == 2);
+  fs::path empty = temp_dir("empty");
+  CHECK(wait_exit(spawn({kBin, "--images", empty.string(), "--lcm-url", kUrl}), 10) == 1);
+  fs::remove_all(empty);
+}
+
+TEST_CASE("the folder source skips unreadable images and lists only image files") {
+  fs::path dir = temp_dir("list");
+  cv::imwrite((dir / "b.png").string(), numbered_frame(1));
+  cv::imwrite((dir / "a.jpg").string(), numbered_frame(0));
+  std::ofstream(dir / "c.png") << "corrupt";
+  std::ofstream(dir / "readme.md") << "x";
+  auto files = camera::list_image_files(dir.string());
+  REQUIRE(files.size() == 3);
+  CHECK(files[0].filename() == "a.jpg");
+  auto source = camera::open_folder(dir.string(), 10, false);
+  cv::Mat frame;
+  int read = 0;
+  while (source->next(frame)) ++read;
+  CHECK(read == 2);
+  fs::remove_all(dir);
+}
