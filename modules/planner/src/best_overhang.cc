@@ -492,13 +492,16 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
       }
     std::sort(ranked.begin(), ranked.end(),
               [](const OverhangStack& a, const OverhangStack& b) { return a.overhang > b.overhang; });
-    if (ranked.empty()) {
-      // Nothing converged: the best of n-1 plus a block lying on the surface far to the left still balances.
+    {
+      // Always a candidate: the best of n-1 plus a block lying on the surface far to the left (still balanced),
+      // so the table never decreases with n even when nothing better converges.
       OverhangStack fallback = best_per_n.back();
       double left = 0.0;
       for (const PlacedBlock& b : fallback.blocks) left = std::min(left, b.x);
       fallback.blocks.insert(fallback.blocks.begin(), PlacedBlock{0, left - 2.0});
-      ranked.push_back(fallback);
+      auto at = std::find_if(ranked.begin(), ranked.end(),
+                             [&](const OverhangStack& r) { return r.overhang < fallback.overhang; });
+      ranked.insert(at, fallback);
     }
     beam.assign(ranked.begin(), ranked.begin() + std::min<size_t>(ranked.size(), options.beam));
     best_per_n.push_back(beam.front());
