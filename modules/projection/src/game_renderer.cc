@@ -111,7 +111,10 @@ void GameRenderer::draw_blocks(const Scene& scene, const BoardToProjector& mappi
 void GameRenderer::draw_hud(const Hud& hud) {
   const int margin = std::max(4, height_ / 48);
   const int right = width_ - margin;
-  layout_.score = draw_text(kScore, font_big_, "SCORE " + std::to_string(hud.score), kText, right, margin, 2);
+  // The number big, its label small to its left (a big "SCORE 190" would run into the timer).
+  layout_.score = draw_text(kScore, font_big_, std::to_string(hud.score), kText, right, margin, 2);
+  const int label_y = layout_.score.y + TTF_FontAscent(font_big_) - TTF_FontAscent(font_small_);
+  layout_.score_label = draw_text(kScoreLabel, font_small_, "SCORE", kTextDim, layout_.score.x - margin / 2, label_y, 2);
   int y = layout_.score.y + std::max(layout_.score.h, TTF_FontLineSkip(font_big_));
   layout_.max = draw_text(kMax, font_mid_, "MAX " + std::to_string(hud.max_score), kText, right, y, 2);
   y = layout_.max.y + std::max(layout_.max.h, TTF_FontLineSkip(font_mid_));

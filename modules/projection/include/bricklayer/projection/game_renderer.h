@@ -38,7 +38,8 @@ struct Hud {
 // Where the parts of the display were drawn in the last frame (projector pixels). Text rectangles
 // are the drawn text's bounds; an empty rectangle means not drawn.
 struct Layout {
-  SDL_Rect score{};
+  SDL_Rect score{};        // the score's number
+  SDL_Rect score_label{};  // "SCORE"
   SDL_Rect max{};
   SDL_Rect best{};
   SDL_Rect timer{};
@@ -68,7 +69,7 @@ class GameRenderer {
     int w = 0;
     int h = 0;
   };
-  enum Slot { kScore, kMax, kBest, kTimer, kRoundLabel, kSlotCount };
+  enum Slot { kScore, kScoreLabel, kMax, kBest, kTimer, kRoundLabel, kSlotCount };
   // Draws text with its top edge at y; align: 0 left of x, 1 centred on x, 2 right of x.
   SDL_Rect draw_text(Slot slot, TTF_Font* font, const std::string& text, Rgb colour, int x, int y, int align);
   void fill_quad(const std::array<SDL_FPoint, 4>& corners, Rgb colour);

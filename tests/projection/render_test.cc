@@ -1,0 +1,287 @@
+// Screenshot tests with SDL's offscreen video driver: what the projector shows, read back with
+// SDL_RenderReadPixels (Display::read_frame).
+#include "bricklayer/projection/game_renderer.h"
+
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "bricklayer/common/board.h"
+#include "bricklayer/projection/display.h"
+#include "bricklayer/projection/projection_app.h"
+
+using namespace bricklayer;
+using namespace bricklayer::projection;
+
+namespace {
+
+struct Fixture {
+  Display display{DisplayOptions{DisplayMode::kHeadless, 0, 1024, 768, false, "test", ""}};
+  GameRenderer renderer{display.renderer(), 1024, 768};
+
+  cv::Mat draw(const Scene& scene, const BoardToProjector& mapping, const Hud& hud, int64_t anim_ms = 0) {
+    display.begin_frame();
+    renderer.draw_game(scene, mapping, hud, anim_ms);
+    display.present();
+    return display.read_frame();
+  }
+};
+
+stack_t make_stack(int64_t frame, std::vector<std::tuple<int64_t, int, double>> blocks) {
+  stack_t s{};
+  s.frame_number = frame;
+  s.block_length = 1;
+  s.block_height = 1.0 / 3.0;
+  s.status = stack_t::STATUS_OK;
+  for (auto [id, row, x] : blocks) {
+    block_t b{};
+    b.id = id;
+    b.row = row;
+    b.x = x;
+    s.blocks.push_back(b);
+  }
+  s.num_blocks = static_cast<int32_t>(s.blocks.size());
+  return s;
+}
+
+prediction_t make_prediction(int64_t frame, std::vector<std::pair<int64_t, int8_t>> states) {
+  prediction_t p{};
+  p.frame_number = frame;
+  p.status = prediction_t::STATUS_OK;
+  for (auto [id, state] : states) {
+    block_prediction_t b{};
+    b.id = id;
+    b.state = state;
+    p.blocks.push_back(b);
+  }
+  p.num_blocks = static_cast<int32_t>(p.blocks.size());
+  return p;
+}
+
+cv::Vec3b bgr(Rgb c) { return cv::Vec3b(c.b, 0, c.r); }
+
+// Every pixel of a 7x7 grid inside the block (10% in from its edges) has the expected colour.
+void check_block_colour(const cv::Mat& frame, const BoardToProjector& m, const SceneBlock& b, Rgb expected) {
+  for (int i = 1; i <= 7; ++i) {
+    for (int j = 1; j <= 7; ++j) {
+      const double fx = 0.1 + 0.8 * (i - 1) / 6.0, fy = 0.1 + 0.8 * (j - 1) / 6.0;
+      const Point2 p = m.map(b.x + fx, b.y + fy * b.height);
+      const int u = static_cast<int>(std::lround(p.x)), v = static_cast<int>(std::lround(p.y));
+      REQUIRE(u >= 0);
+      REQUIRE(v >= 0);
+      REQUIRE(u < frame.cols);
+      REQUIRE(v < frame.rows);
+      INFO("block " << b.id << " at projector (" << u << ", " << v << ")");
+      CHECK(frame.at<cv::Vec3b>(v, u) == bgr(expected));
+    }
+  }
+}
+
+int green_pixels(const cv::Mat& frame) {
+  cv::Mat green;
+  cv::extractChannel(frame, green, 1);
+  return cv::countNonZero(green);
+}
+
+int lit_pixels(const cv::Mat& frame, const SDL_Rect& r) {
+  if (r.w <= 0 || r.h <= 0) return 0;
+  cv::Mat grey;
+  cv::cvtColor(frame(cv::Rect(r.x, r.y, r.w, r.h) & cv::Rect(0, 0, frame.cols, frame.rows)), grey, cv::COLOR_BGR2GRAY);
+  return cv::countNonZero(grey);
+}
+
+void save_for_review(const cv::Mat& frame, const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::path(BRICKLAYER_BINARY_DIR) / "test-output" / "projection";
+  std::filesystem::create_directories(dir);
+  cv::imwrite((dir / name).string(), frame);
+}
+
+Hud hud_for(const Scene& scene) {
+  Hud hud;
+  hud.score = scene.score();
+  hud.max_score = 87;
+  hud.remaining_ms = 154000;
+  hud.round_state = RoundClock::State::kRunning;
+  hud.num_blocks = static_cast<int>(scene.blocks().size());
+  hud.overhang = scene.overhang();
+  hud.best_overhang = 1.0;
+  return hud;
+}
+
+}  // namespace
+
+TEST_CASE("every block is filled with its predicted colour where the default mapping puts it") {
+  Fixture f;
+  Scene scene;
+  scene.set_stack(make_stack(3, {{1, 0, -0.5}, {2, 1, 0.0}, {3, 2, 0.6}, {4, 0, -1.6}}));
+  scene.set_prediction(make_prediction(3, {{1, block_prediction_t::STATE_STABLE},
+                                          {2, block_prediction_t::STATE_MOVING},
+                                          {3, block_prediction_t::STATE_CAUSE}}));
+  BoardToProjector mapping;
+  cv::Mat frame = f.draw(scene, mapping, hud_for(scene));
+  save_for_review(frame, "blocks-default.png");
+  REQUIRE(frame.size() == cv::Size(1024, 768));
+  const auto& blocks = scene.blocks();
+  check_block_colour(frame, mapping, blocks[0], kStableBlue);
+  check_block_colour(frame, mapping, blocks[1], kMovingMagenta);
+  check_block_colour(frame, mapping, blocks[2], kCauseRed);
+  check_block_colour(frame, mapping, blocks[3], kUnknownDimBlue);  // no prediction for id 4
+  // Between the blocks and outside them the board stays dark: right of block 3, left of the pile.
+  const Point2 beyond = mapping.map(1.9, 5.0 / 6.0);
+  CHECK(frame.at<cv::Vec3b>(static_cast<int>(beyond.y), static_cast<int>(beyond.x)) == cv::Vec3b(0, 0, 0));
+  CHECK(green_pixels(frame) == 0);
+}
+
+TEST_CASE("a prediction for an older frame keeps its colours on the newest stack") {
+  Fixture f;
+  Scene scene;
+  scene.set_stack(make_stack(10, {{1, 0, -0.5}, {2, 1, 0.0}}));
+  scene.set_prediction(make_prediction(10, {{1, 0}, {2, 2}}));
+  scene.set_stack(make_stack(11, {{1, 0, -0.5}, {2, 1, 0.05}, {3, 2, 0.3}}));
+  BoardToProjector mapping;
+  cv::Mat frame = f.draw(scene, mapping, hud_for(scene));
+  check_block_colour(frame, mapping, scene.blocks()[0], kStableBlue);
+  check_block_colour(frame, mapping, scene.blocks()[1], kCauseRed);
+  check_block_colour(frame, mapping, scene.blocks()[2], kUnknownDimBlue);
+}
+
+TEST_CASE("blocks follow a calibrated mapping") {
+  Fixture f;
+  Scene scene;
+  scene.set_stack(make_stack(1, {{1, 0, -0.5}, {2, 1, 0.2}}));
+  scene.set_prediction(make_prediction(1, {{1, 2}, {2, 0}}));
+  // A projector that is shifted, slightly scaled and keystoned relative to the camera.
+  const std::array<double, 9> c2p = {1.5, 0.02, 40, -0.01, 1.45, 30, 1e-5, 2e-5, 1};
+  BoardToProjector mapping = BoardToProjector::from_homographies(c2p, BoardGeometry{}.camera_to_board());
+  cv::Mat frame = f.draw(scene, mapping, hud_for(scene));
+  save_for_review(frame, "blocks-calibrated.png");
+  check_block_colour(frame, mapping, scene.blocks()[0], kCauseRed);
+  check_block_colour(frame, mapping, scene.blocks()[1], kStableBlue);
+  // Where the default mapping would have put block 1 is not all red any more.
+  BoardToProjector uncalibrated;
+  const Point2 old = uncalibrated.map(-0.45, 0.03);
+  CHECK(frame.at<cv::Vec3b>(static_cast<int>(old.y), static_cast<int>(old.x)) != bgr(kCauseRed));
+}
+
+TEST_CASE("score, MAX, closeness and timer are drawn as text, top right and top centre") {
+  Fixture f;
+  Scene scene;
+  scene.set_stack(make_stack(1, {{1, 0, -0.25}, {2, 1, 0.1}}));
+  scene.set_prediction(make_prediction(1, {{1, 0}, {2, 0}}));
+  Hud hud = hud_for(scene);
+  cv::Mat frame = f.draw(scene, BoardToProjector{}, hud);
+  const Layout layout = f.renderer.layout();
+  CHECK(lit_pixels(frame, layout.score) > 500);
+  CHECK(lit_pixels(frame, layout.max) > 300);
+  CHECK(lit_pixels(frame, layout.best) > 100);
+  CHECK(lit_pixels(frame, layout.timer) > 500);
+  // Top right: the score's right edge is near the right edge, in the top fifth of the image.
+  CHECK(layout.score.x + layout.score.w > 1024 - 40);
+  CHECK(layout.score.y < 768 / 5);
+  CHECK(layout.max.y > layout.score.y);
+  // Large enough to read across a room: the score text is at least 1/16 of the image high.
+  CHECK(layout.score.h >= 768 / 16);
+  CHECK(std::abs(layout.timer.x + layout.timer.w / 2 - 512) < 10);
+  CHECK(green_pixels(frame) == 0);
+
+  // No best-overhang table entry: that line is simply not drawn.
+  hud.best_overhang.reset();
+  cv::Mat without = f.draw(scene, BoardToProjector{}, hud);
+  CHECK(f.renderer.layout().best.w == 0);
+  CHECK(lit_pixels(without, layout.best) < lit_pixels(frame, layout.best));
+}
+
+TEST_CASE("the miniature shows the pile with its colours, the collapse ghost and the hint, green stays 0") {
+  Fixture f;
+  Scene scene;
+  scene.set_stack(make_stack(7, {{1, 0, -0.3}, {2, 1, 0.3}, {3, 2, 0.9}}));
+  scene.set_prediction(make_prediction(7, {{1, 0}, {2, 1}, {3, 2}}));
+  collapse_preview_t preview{};
+  preview.frame_number = 7;
+  preview.num_blocks = 3;
+  preview.block_ids = {1, 2, 3};
+  preview.num_frames = 2;
+  preview.time_s = {0.0, 0.4};
+  preview.num_values = 18;
+  preview.poses = {0.2, 1 / 6.0, 0, 0.8, 0.5, 0, 1.4, 5 / 6.0, 0,
+                   0.2, 1 / 6.0, 0, 0.9, 0.3, -0.3, 1.6, 0.2, -0.9};
+  scene.set_preview(preview);
+  hint_t hint{};
+  hint.num_blocks = 1;
+  hint.rows = {1};
+  hint.xs = {-0.7};
+  scene.set_hint(hint);
+  Hud hud = hud_for(scene);
+  cv::Mat frame = f.draw(scene, BoardToProjector{}, hud, /*anim_ms=*/250);
+  save_for_review(frame, "minimap.png");
+  const SDL_Rect box = f.renderer.layout().minimap;
+  REQUIRE(box.w > 100);
+  cv::Mat mini = frame(cv::Rect(box.x, box.y, box.w, box.h));
+  // All three state colours appear in the miniature, and so do the ghost's and hint's colours.
+  auto count = [&](Rgb c) {
+    cv::Mat mask;
+    cv::inRange(mini, bgr(c), bgr(c), mask);
+    return cv::countNonZero(mask);
+  };
+  CHECK(count(kStableBlue) > 50);  // block 1 (and the hint outline, also blue)
+  CHECK(count(kMovingMagenta) > 50);
+  CHECK(count(kCauseRed) > 50);
+  CHECK(count(kGhost) > 20);
+  CHECK(green_pixels(frame) == 0);
+  // The animation moves: another time, another picture.
+  cv::Mat later = f.draw(scene, BoardToProjector{}, hud, 1000);
+  CHECK(cv::norm(frame, later, cv::NORM_L1) > 0);
+  CHECK(green_pixels(later) == 0);
+}
+
+TEST_CASE("an ended round and an empty board also keep green at 0") {
+  Fixture f;
+  Scene scene;
+  Hud hud;
+  hud.round_state = RoundClock::State::kEnded;
+  hud.max_score = 123;
+  cv::Mat frame = f.draw(scene, BoardToProjector{}, hud);
+  CHECK(green_pixels(frame) == 0);
+  CHECK(lit_pixels(frame, f.renderer.layout().round_label) > 50);  // "TIME UP"
+}
+
+TEST_CASE("a calibration pattern fills the whole projector image, green included") {
+  Fixture f;
+  command_t c{};
+  c.command = command_t::SHOW_PATTERN;
+  c.pattern = command_t::PATTERN_SOLID;
+  c.red = 10;
+  c.green = 200;
+  c.blue = 30;
+  f.display.begin_frame();
+  f.renderer.draw_pattern(render_command_pattern(c, 1024, 768));
+  f.display.present();
+  cv::Mat frame = f.display.read_frame();
+  cv::Mat mask;
+  cv::inRange(frame, cv::Vec3b(30, 200, 10), cv::Vec3b(30, 200, 10), mask);
+  CHECK(cv::countNonZero(mask) == 1024 * 768);
+}
+
+TEST_CASE("a Gray-code pattern is shown pixel for pixel") {
+  Fixture f;
+  command_t c{};
+  c.command = command_t::SHOW_PATTERN;
+  c.pattern = command_t::PATTERN_GRAY_CODE;
+  c.index = 0;
+  cv::Mat pattern;
+  try {
+    pattern = render_command_pattern(c, 1024, 768);
+  } catch (const std::invalid_argument& e) {
+    WARN("built without calibration patterns: " << e.what());
+    return;
+  }
+  f.display.begin_frame();
+  f.renderer.draw_pattern(pattern);
+  f.display.present();
+  cv::Mat frame = f.display.read_frame();
+  CHECK(cv::norm(frame, pattern, cv::NORM_INF) == 0);
+}
