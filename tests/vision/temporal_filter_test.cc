@@ -1,0 +1,56 @@
+#include "bricklayer/vision/temporal_filter.h"
+
+#include <catch2/catch.hpp>
+
+using namespace bricklayer::vision;
+
+namespace {
+DetectedBlock at(int row, double x) {
+  DetectedBlock b;
+  b.row = row;
+  b.x = x;
+  b.confidence = 1.0;
+  return b;
+}
+}  // namespace
+
+TEST_CASE("a block is published once seen in 2 of the last 3 frames, and keeps its id") {
+  TemporalFilter f;  // confirm 2 of 3, hold 3, deadband 0.01
+  CHECK(f.update({at(0, -0.5)}).empty());  // seen once: not yet
+  auto two = f.update({at(0, -0.5)});
+  REQUIRE(two.size() == 1);
+  int64_t id = two[0].id;
+  auto three = f.update({at(0, -0.502)});
+  REQUIRE(three.size() == 1);
+  CHECK(three[0].id == id);
+  CHECK(three[0].block.x == Approx(-0.5));  // inside the deadband: unchanged
+  auto moved = f.update({at(0, -0.45)});
+  REQUIRE(moved.size() == 1);
+  CHECK(moved[0].block.x == Approx(-0.45));  // beyond the deadband: follows
+  CHECK(moved[0].id == id);
+}
+
+TEST_CASE("a lost block is held a few frames then dropped, and a one-frame flicker never appears") {
+  TemporalFilter f;
+  f.update({at(0, 0.1)});
+  f.update({at(0, 0.1)});
+  for (int k = 1; k <= 3; ++k) {
+    auto held = f.update({});
+    REQUIRE(held.size() == 1);
+    CHECK(held[0].missed == k);
+  }
+  CHECK(f.update({}).empty());
+  // A spurious detection in one frame only is never published.
+  TemporalFilter g;
+  CHECK(g.update({at(2, 1.0)}).empty());
+  CHECK(g.update({}).empty());
+  CHECK(g.update({}).empty());
+}
+
+TEST_CASE("blocks in different rows are different tracks") {
+  TemporalFilter f;
+  f.update({at(0, 0.0), at(1, 0.0)});
+  auto both = f.update({at(0, 0.0), at(1, 0.0)});
+  REQUIRE(both.size() == 2);
+  CHECK(both[0].id != both[1].id);
+}
