@@ -13,6 +13,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "../common/spawn_util.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/module.h"
 #include "bricklayer/image_t.hpp"
@@ -20,34 +21,16 @@
 #include "bricklayer/stack_t.hpp"
 
 using namespace bricklayer;
+using test::spawn;
+using test::stop;
+using test::wait_exit;
 
 namespace {
 const std::string kBin = std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-simcam";
 const std::string kScenarios = std::string(BRICKLAYER_SOURCE_DIR) + "/launch/scenarios/";
 constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
-pid_t spawn(std::vector<std::string> args) {
-  pid_t pid = fork();
-  if (pid == 0) {
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
-  return pid;
-}
 
-int wait_exit(pid_t pid, int seconds) {
-  for (int i = 0; i < seconds * 50; ++i) {
-    int status = 0;
-    if (waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    usleep(20000);
-  }
-  kill(pid, SIGKILL);
-  waitpid(pid, nullptr, 0);
-  return -2;
-}
 
 void pump_for(Module& m, double seconds) {
   auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);

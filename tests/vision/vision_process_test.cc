@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "../common/spawn_util.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/module.h"
 #include "bricklayer/core/predict.h"
@@ -28,27 +29,15 @@
 #include "bricklayer/stack_t.hpp"
 
 using namespace bricklayer;
+using test::spawn;
+using test::stop;
+using test::wait_exit;
 namespace fs = std::filesystem;
 
 namespace {
 std::string bin(const std::string& name) { return std::string(BRICKLAYER_BINARY_DIR) + "/bin/" + name; }
 constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
-pid_t spawn(std::vector<std::string> args) {
-  pid_t pid = fork();
-  if (pid == 0) {
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
-  return pid;
-}
-void stop(pid_t pid) {
-  kill(pid, SIGTERM);
-  waitpid(pid, nullptr, 0);
-}
 std::string run_capture(const std::string& command) {
   std::string out;
   FILE* p = popen(command.c_str(), "r");
