@@ -113,3 +113,11 @@ TEST_CASE("validate rejects non-finite numbers in a Stack built in code, naming 
   s.block_length = 1e-310;  // positive, but (x - edge) / length overflows
   REQUIRE_THROWS_WITH(validate(s), Catch::Contains("id 1") && Catch::Contains("relative to the edge"));
 }
+
+TEST_CASE("a row above the block limit is rejected, not overflowed") {
+  bricklayer::core::Stack s;
+  s.blocks = {{1, 2147483647, 0.0}};
+  CHECK_THROWS_WITH(bricklayer::core::validate(s), Catch::Contains("row 2147483647 is above the highest possible row"));
+  s.blocks = {{1, 1999, 0.0}};  // floating at the highest row the default limit allows: valid
+  CHECK_NOTHROW(bricklayer::core::validate(s));
+}

@@ -44,6 +44,12 @@ void validate(const Stack& stack, const StackLimits& limits) {
     // Normalised coordinates must stay finite too (x / block_length can overflow).
     require_finite((b.x - stack.table_edge) / stack.block_length, block_name(stack, i) + ": x relative to the edge");
     if (b.row < 0) throw StackError(block_name(stack, i) + ": row must be >= 0, got " + std::to_string(b.row));
+    // Rows index per-row tables: a pile can never be taller than the block limit, and a row near
+    // INT32_MAX would overflow "row + 1" (found by UBSan through test_reliability_hostile_input).
+    if (static_cast<size_t>(b.row) >= limits.max_blocks)
+      throw StackError(block_name(stack, i) + ": row " + std::to_string(b.row) + " is above the highest possible row (" +
+                       std::to_string(limits.max_blocks - 1) + " with a limit of " +
+                       std::to_string(limits.max_blocks) + " blocks)");
     auto [it, inserted] = seen.emplace(b.id, i);
     if (!inserted) {
       throw StackError(block_name(stack, i) + ": duplicate id, already used by block " + std::to_string(it->second));
