@@ -119,6 +119,8 @@ int Main(int argc, char** argv) {
             cv::imwrite(name, r.bgr);
             std::fprintf(stderr, "%s: truth %d detected %d matched %d row_wrong %d\n", name, s.truth, s.detected,
                          s.matched, s.row_wrong);
+            for (const auto& tb : r.truth) std::fprintf(stderr, "  truth row %d x %.4f%s\n", tb.row, tb.x, tb.visible ? "" : " (partly outside)");
+            for (const auto& db : d.blocks) std::fprintf(stderr, "  found row %d x %.4f conf %.2f\n", db.row, db.x, db.confidence);
           }
         }
         const double recall = t.truth ? static_cast<double>(t.matched) / t.truth : 1.0;

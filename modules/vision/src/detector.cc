@@ -119,8 +119,7 @@ void Detector::prepare(cv::Size size) {
   leak_valid_ = true;
 }
 
-void Detector::find_lines(const float* up, const float* lo, int n, std::vector<double>& lines,
-                          std::vector<double>& depths, int& rejected) {
+void Detector::find_lines(const float* up, const float* lo, int n, std::vector<Dip>& dips, int& rejected) {
   const double length = frame_.geometry().block_length_px;
   const int max_radius = std::max(2, static_cast<int>(std::lround(0.09 * length)));
   const int box_radius = std::max(2, static_cast<int>(std::lround(0.10 * length)));
@@ -191,8 +190,7 @@ void Detector::find_lines(const float* up, const float* lo, int n, std::vector<d
       const double w = d[k] - floor_level;
       if (w > 0) sw += w, sx += w * k;
     }
-    lines.push_back(sw > 0 ? sx / sw : p);
-    depths.push_back(peak);
+    dips.push_back({sw > 0 ? sx / sw : p, peak, width});
   }
 }
 
@@ -235,6 +233,7 @@ Detection Detector::detect(const cv::Mat& frame) {
     double err, depth;
   };
   std::vector<Pair> pairs;
+  std::vector<std::vector<Dip>> band_dips(bands_.size());
   for (size_t bi = 0; bi < bands_.size(); ++bi) {
     const Band& band = bands_[bi];
     cv::reduce(rect.rowRange(band.y0, band.y1), up_m, 0, cv::REDUCE_AVG, CV_32F);
@@ -247,75 +246,101 @@ Detection Detector::detect(const cv::Mat& frame) {
         lo[x] = std::max(0.0f, lo[x] - leak_lo_[bi][x]);
       }
     }
+    find_lines(up, lo, n, band_dips[bi], out.rejected_wide);
+  }
+  // Width of a single line in this frame (blur and focus vary): the median dip width, since most dips
+  // are single lines. A dip clearly wider is two nearly touching lines: split it around its centroid.
+  std::vector<double> widths;
+  for (const auto& dips : band_dips)
+    for (const Dip& dip : dips) widths.push_back(dip.width);
+  double single_width = 0;
+  if (widths.size() >= 4) {
+    std::nth_element(widths.begin(), widths.begin() + widths.size() / 2, widths.end());
+    single_width = widths[widths.size() / 2];
+  }
+
+  for (size_t bi = 0; bi < bands_.size(); ++bi) {
+    const Band& band = bands_[bi];
     lines.clear();
     depths.clear();
-    find_lines(up, lo, n, lines, depths, out.rejected_wide);
+    for (const Dip& dip : band_dips[bi]) {
+      if (single_width > 0 && dip.width > config_.split_ratio * single_width) {
+        const double half_spacing = 0.5 * (dip.width - single_width);
+        lines.push_back(dip.pos - half_spacing);
+        lines.push_back(dip.pos + half_spacing);
+        depths.push_back(dip.depth);
+        depths.push_back(dip.depth);
+      } else {
+        lines.push_back(dip.pos);
+        depths.push_back(dip.depth);
+      }
+    }
     out.lines += static_cast<int>(lines.size());
+    if (config_.keep_lines)
+      for (size_t k = 0; k < lines.size(); ++k) out.line_list.push_back({band.row, lines[k], depths[k]});
 
-    // Pairing, left to right. A block is two lines one length apart; when blocks touch, one line (or two
-    // nearly coincident ones) ends a block and starts the next.
+    // Pairing: a block is two lines one length apart; when blocks touch, one line (or two nearly
+    // coincident ones) ends a block and starts the next. Choose the non-overlapping set of blocks that
+    // explains the most lines, then the best lengths (dynamic programming over the sorted lines).
     const int m = static_cast<int>(lines.size());
-    auto partner = [&](int i, double& err) {
-      int best = -1;
-      err = tol;
-      for (int k = i + 1; k < m && lines[k] - lines[i] < length + tol; ++k) {
-        const double e = std::abs(lines[k] - lines[i] - length);
-        if (e < err) err = e, best = k;
+    // score[i][used]: best over lines i.. when line i is (used = 1) or is not yet the right end of a block.
+    std::vector<std::array<double, 2>> score(m + 1, {0.0, 0.0});
+    std::vector<std::array<int, 2>> choice(m + 1, {-1, -1});      // partner j, or -1 for "skip line i"
+    std::vector<std::array<int, 2>> next_used(m + 1, {0, 0});     // after the block (i, j): continue at j (1) or j+1 (0)
+    for (int i = m - 1; i >= 0; --i) {
+      for (int used = 0; used <= 1; ++used) {
+        double best = score[i + 1][0];
+        int best_j = -1, best_next = 0;
+        for (int j = i + 1; j < m && lines[j] - lines[i] < length + tol; ++j) {
+          const double e = std::abs(lines[j] - lines[i] - length);
+          if (e >= tol) continue;
+          const double gain = (used ? 0.0 : 1.0) + 1.0 - 0.5 * e / tol;
+          const double via_shared = score[j][1];
+          const double via_next = score[j + 1][0];
+          const double total = gain + std::max(via_shared, via_next);
+          if (total > best + 1e-9) best = total, best_j = j, best_next = via_shared > via_next ? 1 : 0;
+        }
+        score[i][used] = best;
+        choice[i][used] = best_j;
+        next_used[i][used] = best_next;
       }
-      return best;
-    };
-    // Among starts within `tol` of line i, the one whose pair has the best length.
-    auto best_start = [&](int i, int& j, double& err) {
-      int s = -1;
-      err = tol;
-      j = -1;
-      for (int k = i; k < m && lines[k] - lines[i] < tol; ++k) {
-        double e;
-        const int p = partner(k, e);
-        if (p >= 0 && e < err) err = e, s = k, j = p;
-      }
-      return s;
-    };
-    int i = 0;
-    bool shared_left = false;
-    while (i < m) {
-      int j;
-      double err;
-      const int s = best_start(i, j, err);
-      if (s < 0) {
+    }
+    for (int i = 0, used = 0; i < m;) {
+      const int j = choice[i][used];
+      if (j < 0) {
         ++i;
-        shared_left = false;
+        used = 0;
         continue;
       }
-      if (s != i) shared_left = false;
       Pair pair;
       pair.row = band.row;
-      pair.left = lines[s];
+      pair.left = lines[i];
       pair.right = lines[j];
-      pair.shared_left = shared_left;
-      pair.err = err;
-      pair.depth = std::min(depths[s], depths[j]);
+      pair.shared_left = used == 1;
+      pair.shared_right = next_used[i][used] == 1;
+      pair.err = std::abs(lines[j] - lines[i] - length);
+      pair.depth = std::min(depths[i], depths[j]);
       pairs.push_back(pair);
-      // The right line may start the next block (touching blocks): then it is shared by both.
-      double next_err;
-      int next_j;
-      const int next = best_start(j, next_j, next_err);
-      shared_left = next == j;
-      if (shared_left) pairs.back().shared_right = true;
-      i = j;
+      if (pair.shared_right) {
+        i = j;
+        used = 1;
+      } else {
+        i = j + 1;
+        used = 0;
+      }
     }
   }
 
   // Lines lie inside the blocks: a lone line's centroid is half a line width inside the block's end,
   // a line shared by two touching blocks sits on the boundary. The line width comes from the pairs of
   // lone lines in this frame (their centroids are one length minus one line width apart).
-  std::vector<double> widths;
+  std::vector<double> pair_widths;
   for (const Pair& p : pairs)
-    if (!p.shared_left && !p.shared_right) widths.push_back(length - (p.right - p.left));
+    if (!p.shared_left && !p.shared_right) pair_widths.push_back(length - (p.right - p.left));
   double line_width = config_.line_width * length;
-  if (widths.size() >= 3) {
-    std::nth_element(widths.begin(), widths.begin() + widths.size() / 2, widths.end());
-    line_width = std::clamp(widths[widths.size() / 2], 0.0, config_.max_line_width * length);
+  if (pair_widths.size() >= 3) {
+    std::nth_element(pair_widths.begin(), pair_widths.begin() + pair_widths.size() / 2, pair_widths.end());
+    line_width = std::clamp(pair_widths[pair_widths.size() / 2], 0.0, config_.max_line_width * length);
   }
   for (const Pair& p : pairs) {
     const double left = p.shared_left ? p.left + 0.5 * line_width : p.left;

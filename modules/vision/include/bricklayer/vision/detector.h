@@ -24,7 +24,8 @@ namespace bricklayer::vision {
 
 struct DetectorConfig {
   double min_depth = 0.10;         // line darkness needed, as a fraction of the local background (0..1)
-  double max_line_width = 0.10;    // block lengths; wider dark dips are out-of-focus shapes, not lines
+  double max_line_width = 0.15;    // block lengths; wider dark dips are out-of-focus shapes, not lines
+  double split_ratio = 1.4;        // a dip this much wider than a single line is two nearly touching lines
   double length_tolerance = 0.10;  // block lengths; how far a line pair may be from one block length apart
   double band_margin = 0.2;        // fraction of the block height ignored at the top and bottom of a row band
   double min_board_level = 12.0;   // mean green (0..255) of the board area below which it is not seen
@@ -33,6 +34,7 @@ struct DetectorConfig {
   std::array<double, 3> default_green_mixing = {0.12, 0.60, 0.14};
   // End-line width in block lengths, used only when a frame has too few separate blocks to measure it.
   double line_width = 1.0 / 40.0;
+  bool keep_lines = false;         // fill Detection::line_list (diagnostics)
 };
 
 struct DetectedBlock {
@@ -50,6 +52,11 @@ struct Detection {
   std::vector<DetectedBlock> blocks;  // sorted: bottom row first, left to right
   int lines = 0;                      // accepted line profiles
   int rejected_wide = 0;              // dark dips rejected as out of focus
+  struct Line {
+    int row;
+    double x_px, depth;  // centroid in the rectified frame; darkness relative to the background
+  };
+  std::vector<Line> line_list;        // every accepted line (only with DetectorConfig::keep_lines)
 };
 
 class Detector {
@@ -77,8 +84,10 @@ class Detector {
     int y0, y1, y2;  // upper half [y0, y1), lower half [y1, y2) in rectified pixels
   };
   void prepare(cv::Size rectified_size);
-  void find_lines(const float* up, const float* lo, int width, std::vector<double>& lines,
-                  std::vector<double>& depths, int& rejected);
+  struct Dip {
+    double pos, depth, width;  // centroid (px), darkness (0..1), width at half depth (px)
+  };
+  void find_lines(const float* up, const float* lo, int width, std::vector<Dip>& dips, int& rejected);
 
   DetectorConfig config_;
   BoardGeometry default_geometry_;
