@@ -29,7 +29,7 @@ using test::wait_exit;
 namespace fs = std::filesystem;
 
 namespace {
-const std::string kBin = std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-camera";
+const std::string kBin = test::program("bricklayer-camera");
 constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 

@@ -26,7 +26,7 @@ using test::stop;
 using test::wait_exit;
 
 namespace {
-const std::string kBin = std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-simcam";
+const std::string kBin = test::program("bricklayer-simcam");
 const std::string kScenarios = std::string(BRICKLAYER_SOURCE_DIR) + "/launch/scenarios/";
 constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 

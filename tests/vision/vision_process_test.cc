@@ -35,7 +35,6 @@ using test::wait_exit;
 namespace fs = std::filesystem;
 
 namespace {
-std::string bin(const std::string& name) { return std::string(BRICKLAYER_BINARY_DIR) + "/bin/" + name; }
 constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 std::string run_capture(const std::string& command) {
@@ -62,7 +61,7 @@ TEST_CASE("offline --json prints one predict-input stack per image, in name orde
     auto frame = renderer.render(stacks[i], simcam::Nuisance::level(1), nullptr, i + 1);
     cv::imwrite((dir / "images" / ("frame" + std::to_string(i) + ".png")).string(), frame.bgr);
   }
-  std::string out = run_capture(bin("bricklayer-vision") + " --images " + (dir / "images").string() + " --board " +
+  std::string out = run_capture(test::program("bricklayer-vision") + " --images " + (dir / "images").string() + " --board " +
                                 (dir / "board.json").string() + " --json");
   std::vector<nlohmann::json> lines;
   size_t start = 0;
@@ -100,10 +99,10 @@ TEST_CASE("simcam -> vision -> prediction over LCM reproduces the verdicts of th
   std::map<int64_t, prediction_t> predictions;
   m.subscribe<bricklayer::stack_t>(channel(kTruthChannel), [&](const bricklayer::stack_t& s) { truth[s.frame_number] = s; });
   m.subscribe<prediction_t>(channel(kPredictionChannel), [&](const prediction_t& p) { predictions[p.frame_number] = p; });
-  pid_t prediction = spawn({bin("bricklayer-prediction"), "--lcm-url", kUrl});
-  pid_t vision = spawn({bin("bricklayer-vision"), "--lcm-url", kUrl});
+  pid_t prediction = spawn({test::program("bricklayer-prediction"), "--lcm-url", kUrl});
+  pid_t vision = spawn({test::program("bricklayer-vision"), "--lcm-url", kUrl});
   usleep(500000);
-  pid_t simcam = spawn({bin("bricklayer-simcam"), "--scenario", (dir / "scenario.json").string(), "--fps", "15",
+  pid_t simcam = spawn({test::program("bricklayer-simcam"), "--scenario", (dir / "scenario.json").string(), "--fps", "15",
                         "--no-projector", "--lcm-url", kUrl});
   auto end = std::chrono::steady_clock::now() + std::chrono::seconds(12);
   int status = 0;

@@ -7,7 +7,6 @@
 //             utime (wall clock when the frame was read); BL_HEARTBEAT once a second ("fps" value).
 // A camera paces itself and its driver keeps one frame (only the newest); files are paced at --fps.
 #include <chrono>
-#include <thread>
 
 #include <opencv2/imgcodecs.hpp>
 

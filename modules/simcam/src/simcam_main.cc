@@ -11,7 +11,7 @@
 // Frames are a pure function of (scenario, seed, frame number, projector image): scenario time is
 // frame_number / fps, and the wall clock only paces publication.
 #include <chrono>
-#include <thread>
+#include <cmath>
 
 #include <opencv2/imgcodecs.hpp>
 
