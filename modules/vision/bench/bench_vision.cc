@@ -37,6 +37,36 @@ uint64_t mix(uint64_t x) {
   return x ^ (x >> 31);
 }
 
+// Depth of every candidate line relative to its frame's median line, split by whether it lies on a true
+// end line: the evidence for DetectorConfig::min_relative_depth (--line-stats).
+struct LineDepths {
+  std::vector<double> real, other;
+};
+
+void collect_line_stats(const simcam::CameraSetup& cam, const cv::Mat* projection, const simcam::ProjectorSetup& proj,
+                        const simcam::Rendered& r, LineDepths& out) {
+  DetectorConfig config;
+  config.keep_lines = true;
+  config.min_relative_depth = 0.0;  // every candidate, before the relative-depth test
+  Detector detector(cam.board, config);
+  if (projection) detector.set_projector_image(*projection, proj.size);
+  const Detection d = detector.detect(r.bgr);
+  std::vector<double> depths;
+  for (const auto& l : d.line_list) depths.push_back(l.depth);
+  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+  const double median = depths.empty() ? 1.0 : depths[depths.size() / 2];
+  const double w = cam.line_width * cam.board.block_length_px;
+  for (const auto& l : d.line_list) {
+    bool real = false;
+    for (const auto& tb : r.truth) {
+      if (tb.row != l.row) continue;
+      const double left = cam.board.to_px_x(tb.x) + 0.5 * w, right = cam.board.to_px_x(tb.x + 1) - 0.5 * w;
+      real = real || std::abs(l.x_px - left) < 2.5 || std::abs(l.x_px - right) < 2.5;
+    }
+    (real ? out.real : out.other).push_back(l.depth / median);
+  }
+}
+
 struct Totals {
   int frames = 0, truth = 0, detected = 0, matched = 0, row_wrong = 0;
   std::vector<double> dx, ms;
@@ -58,7 +88,10 @@ int Main(int argc, char** argv) {
   flags.add("seed", "1", "seed of the random piles and frames");
   flags.add_bool("calibrated", "also run a random distorted camera setup per level, detected through its true calibration");
   flags.add("dump", "", "write frames with a missed, extra or wrongly placed block (> 0.02) as PNG into this directory");
+  flags.add_bool("line-stats", "print the relative depth of candidate lines on and off true end lines per level");
   if (!flags.parse(argc, argv)) return 0;
+  const bool line_stats = flags.get_bool("line-stats");
+  LineDepths line_depths[4][2];
   const int frames = static_cast<int>(flags.get_int("frames"));
   const int frames720 = static_cast<int>(flags.get_int("frames-720"));
   const uint64_t seed = static_cast<uint64_t>(flags.get_int("seed"));
@@ -109,6 +142,8 @@ int Main(int argc, char** argv) {
           ++t.frames;
           t.truth += s.truth, t.detected += s.detected, t.matched += s.matched, t.row_wrong += s.row_wrong;
           t.dx.insert(t.dx.end(), s.dx.begin(), s.dx.end());
+          if (line_stats && config.size == cv::Size(640, 480) && !config.calibrated)
+            collect_line_stats(cam, light ? &projection : nullptr, proj, r, line_depths[level][light]);
           const bool bad = s.matched != s.truth || s.matched != s.detected ||
                            (!s.dx.empty() && *std::max_element(s.dx.begin(), s.dx.end()) > 0.02);
           if (bad && !dump.empty()) {
@@ -121,6 +156,12 @@ int Main(int argc, char** argv) {
                          s.matched, s.row_wrong);
             for (const auto& tb : r.truth) std::fprintf(stderr, "  truth row %d x %.4f%s\n", tb.row, tb.x, tb.visible ? "" : " (partly outside)");
             for (const auto& db : d.blocks) std::fprintf(stderr, "  found row %d x %.4f conf %.2f\n", db.row, db.x, db.confidence);
+            Detector explain(cam.board, [] { DetectorConfig c; c.keep_lines = true; return c; }());
+            if (config.calibrated) explain.set_calibration(eval::true_calibration(cam, proj));
+            if (light) explain.set_projector_image(projection, proj.size);
+            for (const auto& l : explain.detect(r.bgr).line_list)
+              std::fprintf(stderr, "  line row %d x %.2f px (%.4f) depth %.3f\n", l.row, l.x_px,
+                           cam.board.from_px_x(l.x_px), l.depth);
           }
         }
         const double recall = t.truth ? static_cast<double>(t.matched) / t.truth : 1.0;
@@ -147,6 +188,17 @@ int Main(int argc, char** argv) {
                 "median dx %.4f, p95 dx %.4f\n",
                 light ? "red/blue" : "off", a.frames, a.truth, 100.0 * a.matched / std::max(1, a.truth),
                 100.0 * a.matched / std::max(1, a.detected), a.row_wrong, percentile(a.dx, 0.5), percentile(a.dx, 0.95));
+  }
+  if (line_stats) {
+    std::printf("\nCandidate line depth / frame median (640x480 default camera): percentiles 0 / 0.1 / 1 / 50 / 99\n");
+    for (int level = 0; level <= 3; ++level)
+      for (int light = 0; light <= 1; ++light)
+        for (bool real : {true, false}) {
+          const auto& v = real ? line_depths[level][light].real : line_depths[level][light].other;
+          std::printf("%s %s %s: %zu lines, %.3f / %.3f / %.3f / %.3f / %.3f\n", simcam::Nuisance::level(level).name.c_str(),
+                      light ? "red/blue" : "off", real ? "on a true line" : "elsewhere", v.size(), percentile(v, 0),
+                      percentile(v, 0.001), percentile(v, 0.01), percentile(v, 0.5), percentile(v, 0.99));
+        }
   }
   std::printf("640x480 detection time over %zu frames: median %.2f ms, p99 %.2f ms\n", all_ms_640.size(),
               percentile(all_ms_640, 0.5), percentile(all_ms_640, 0.99));

@@ -24,6 +24,7 @@ namespace bricklayer::vision {
 
 struct DetectorConfig {
   double min_depth = 0.10;         // line darkness needed, as a fraction of the local background (0..1)
+  double min_relative_depth = 0.5; // a line at least this fraction as dark as the frame's median line
   double max_line_width = 0.15;    // block lengths; wider dark dips are out-of-focus shapes, not lines
   double split_ratio = 1.4;        // a dip this much wider than a single line is two nearly touching lines
   double length_tolerance = 0.10;  // block lengths; how far a line pair may be from one block length apart
@@ -52,6 +53,7 @@ struct Detection {
   std::vector<DetectedBlock> blocks;  // sorted: bottom row first, left to right
   int lines = 0;                      // accepted line profiles
   int rejected_wide = 0;              // dark dips rejected as out of focus
+  int rejected_faint = 0;             // dips much fainter than the frame's typical line (shadow edges, noise)
   struct Line {
     int row;
     double x_px, depth;  // centroid in the rectified frame; darkness relative to the background
