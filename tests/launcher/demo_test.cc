@@ -1,5 +1,5 @@
 // NETNS, real processes, end to end: the demo profile (simcam -> vision -> prediction -> projection,
-// lcm-logger) runs headless under bricklayer-launch, stops by itself, and its bus log replays through
+// bricklayer-logger) runs headless under bricklayer-launch, stops by itself, and its bus log replays through
 // bricklayer-replay --check with 0 mismatches. Only built when every module of the demo is.
 #include <catch2/catch.hpp>
 

@@ -98,7 +98,11 @@ TEST_CASE("bricklayer-launch --check prints the plan, or names every missing bin
       {"name":"a","command":["/bin/sleep","1"],"heartbeat":""}]})");
   INFO(ok_out);
   CHECK(ok_code == 0);
-  CHECK(ok_out.find("logger (no heartbeat, restart always): /usr/bin/lcm-logger --lcm-url=") != std::string::npos);
+  // The logger is our own (modules/logger), up once its heartbeat arrives, with the profile's defaults
+  // (rotate 10, split 100 MB) and the file under the root.
+  CHECK(ok_out.find("logger (heartbeat logger, restart always): " + std::string(BRICKLAYER_BINARY_DIR) +
+                    "/bin/bricklayer-logger --lcm-url=") != std::string::npos);
+  CHECK(ok_out.find(" --rotate=10 --split-mb=100 " + (dir / "logs" / "x").string() + "\n") != std::string::npos);
   CHECK(ok_out.find("a (no heartbeat, restart always): /bin/sleep 1") != std::string::npos);
   CHECK(ok_out.find("duration: 7 s") != std::string::npos);
   CHECK_FALSE(fs::exists(dir / "logs"));  // a check creates nothing

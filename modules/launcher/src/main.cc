@@ -1,5 +1,5 @@
 // bricklayer-launch: starts one host's set of Bricklayer processes from a declarative profile
-// (launch/profiles/<name>.json), waits for each one's heartbeat, restarts what dies, runs lcm-logger,
+// (launch/profiles/<name>.json), waits for each one's heartbeat, restarts what dies, runs bricklayer-logger,
 // and stops everything cleanly. Usually started through launch/bricklayer PROFILE.
 //
 // Subscribes: BL_HEARTBEAT (heartbeat_t). Publishes: BL_HEARTBEAT (module "launcher").
@@ -29,7 +29,7 @@ fs::path self_dir() {
 int Main(int argc, char** argv) {
   Flags flags("bricklayer-launch",
               "Starts the processes of a launch profile in order, reports each one up when its heartbeat arrives,\n"
-              "restarts any that dies (counted; BRICKLAYER_RESTARTS is passed on), records the bus with lcm-logger\n"
+              "restarts any that dies (counted; BRICKLAYER_RESTARTS is passed on), records the bus with bricklayer-logger\n"
               "into logs/, and on Ctrl-C / SIGTERM / --duration stops everything (SIGTERM, deadline, SIGKILL)\n"
               "and prints a summary. PROFILE is a name in ROOT/launch/profiles/ or a path to a .json file.");
   flags.add_positional("PROFILE", "profile name (demo, all-in-one, camera-host, projector-host) or file");

@@ -57,23 +57,19 @@ LaunchPlan plan_launch(const Profile& profile, const SupervisorOptions& options)
     const LoggerSpec& l = *profile.logger;
     std::string file = strftime_now(l.file);
     fs::path full = fs::path(file).is_absolute() ? fs::path(file) : fs::path(options.root) / file;
-    // lcm-logger 1.3.1: --lcm-url=URL (the -l short form is broken); -i and --rotate exclude each other.
-    std::vector<std::string> argv = {"lcm-logger", "--lcm-url=" + options.lcm_url, "-q"};
+    // bricklayer-logger (modules/logger): lcm-logger's file naming, without its silent 30-message
+    // queue. --rotate 0 means increment (FILE.00, FILE.01, ...), as lcm-logger's -i.
     char split[32];
     std::snprintf(split, sizeof(split), "%g", l.split_mb);
-    if (l.rotate > 0) {
-      argv.push_back("--rotate=" + std::to_string(l.rotate));
-      plan.log_file = full.string() + ".0";
-    } else {
-      argv.push_back("-i");
-      plan.log_file = full.string() + ".*";
-    }
-    argv.push_back(std::string("--split-mb=") + split);
-    argv.push_back(full.string());
-    plan.log_dir = full.parent_path().string();
+    std::vector<std::string> argv = {"bricklayer-logger", "--lcm-url=" + options.lcm_url,
+                                     "--rotate=" + std::to_string(std::max(0, l.rotate)),
+                                     std::string("--split-mb=") + split, full.string()};
+    plan.log_file = full.string() + (l.rotate > 0 ? ".0" : ".*");
     ModuleSpec spec;
     spec.name = "logger";
-    spec.heartbeat = "";
+    // Up only once its heartbeat arrives: it is subscribed by then, so the modules started after it
+    // are recorded from their first message.
+    spec.heartbeat = "logger";
     spec.restart = RestartPolicy::kAlways;
     plan.processes.push_back({spec, resolve("logger", argv)});
   }

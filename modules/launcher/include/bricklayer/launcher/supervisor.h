@@ -1,7 +1,7 @@
 // The launcher's supervisor: starts a profile's modules in order, reports each one up only when its
 // heartbeat (heartbeat_t on BL_HEARTBEAT with the child's pid) arrives, restarts a module that dies
 // or falls silent (counted, logged, BRICKLAYER_RESTARTS in its environment so its own heartbeat says
-// so), runs lcm-logger, and stops everything with SIGTERM and a deadline, then SIGKILL.
+// so), runs bricklayer-logger, and stops everything with SIGTERM and a deadline, then SIGKILL.
 //
 // Subscribes: BL_HEARTBEAT (heartbeat_t). Publishes: BL_HEARTBEAT (its own, module "launcher").
 #pragma once
