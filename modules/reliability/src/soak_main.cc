@@ -2,7 +2,7 @@
 // the checks of issue 8. Run it inside a private network namespace (launch/soak does).
 //
 // Starts bricklayer-launch with a generated profile (vision, prediction, projection --headless,
-// planner, lcm-logger) and plays camera frames onto BL_IMAGE itself: --frames distinct simcam renders
+// planner, bricklayer-logger) and plays camera frames onto BL_IMAGE itself: --frames distinct simcam renders
 // of a --blocks pile (JPEG, as a camera would send them), cycled at --fps with increasing frame
 // numbers. (The bricklayer-simcam process had not landed when this was written; the frames come from
 // the same renderer.)
@@ -13,8 +13,11 @@
 //  - heartbeats continuous (no gap > 2.5 s) for every module not being drilled; errors reported;
 //    no queue growth: the age of each prediction (now - its camera frame's utime) is no larger at the
 //    end of the run than at the start, and prediction's received - published - dropped stays bounded;
-//  - log complete: every prediction_t seen on the bus is in the lcm-logger log (by frame_number),
-//    and the log holds at least as many as the prediction processes' heartbeats say they published;
+//  - log complete: every prediction_t seen on the bus is in the bricklayer-logger log (by
+//    frame_number), and the log holds at least as many as the prediction processes' heartbeats say
+//    they published; every camera frame this tool published is in it; the logger itself reports no
+//    loss (queue full, kernel drops on its socket, frame-number gaps), runs as one process for the
+//    whole run (it is not drilled) and its memory is bounded like the modules';
 //  - --drill: kill -9 each module in turn; the launcher restarts it (new pid, restarts+1) within
 //    --restart-limit s, the other modules keep their pids, and no gap between consecutive predictions
 //    in the log is longer than the slowest restart + 1 s.
@@ -53,7 +56,18 @@ using Clock = std::chrono::steady_clock;
 namespace bricklayer {
 namespace {
 
-const std::vector<std::string> kModules = {"vision", "prediction", "projection", "planner"};
+const std::vector<std::string> kModules = {"vision", "prediction", "projection", "planner"};  // drilled
+const std::string kLogger = "logger";  // watched like a module, never drilled: the log must stay complete
+std::vector<std::string> watched() {
+  std::vector<std::string> all = kModules;
+  all.push_back(kLogger);
+  return all;
+}
+double value_of(const heartbeat_t& hb, const std::string& name) {
+  for (size_t i = 0; i < hb.value_names.size() && i < hb.values.size(); ++i)
+    if (hb.value_names[i] == name) return hb.values[i];
+  return -1;
+}
 
 int64_t wall_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
@@ -128,11 +142,11 @@ class Soak {
     while (since(t0_) < 30) {
       lcm_->handleTimeout(20);
       bool all = true;
-      for (const auto& m : kModules) all = all && watch_[m].seen;
+      for (const auto& m : watched()) all = all && watch_[m].seen;
       if (all) break;
       if (!launch_.running()) break;
     }
-    for (const auto& m : kModules)
+    for (const auto& m : watched())
       if (!watch_[m].seen) return fail_early("module " + m + " sent no heartbeat within 30 s (see " + out_dir_ + "/launch.log)");
     t0_ = Clock::now();
     for (auto& [name, w] : watch_) {
@@ -188,7 +202,7 @@ class Soak {
       m.source = "soak";
       m.data = frames_[static_cast<size_t>(m.frame_number) % frames_.size()];
       m.size = static_cast<int32_t>(m.data.size());
-      lcm_->publish(channel(kImageChannel), &m);
+      if (lcm_->publish(channel(kImageChannel), &m) == 0) ++frames_published_;
       next_frame_t_ += 1.0 / fps_;
       if (next_frame_t_ < t - 1.0) next_frame_t_ = t;  // fell far behind: do not burst
     }
@@ -267,7 +281,7 @@ class Soak {
   void OnHeartbeat(const lcm::ReceiveBuffer*, const std::string&, const heartbeat_t* hb) {
     auto it = watch_.find(hb->module);
     if (it == watch_.end()) {
-      if (std::find(kModules.begin(), kModules.end(), hb->module) == kModules.end()) return;
+      if (hb->module != kLogger && std::find(kModules.begin(), kModules.end(), hb->module) == kModules.end()) return;
       it = watch_.emplace(hb->module, ModuleWatch{}).first;
     }
     ModuleWatch& w = it->second;
@@ -321,6 +335,7 @@ class Soak {
   Clock::time_point t0_;
   double next_frame_t_ = 0;
   int64_t frame_number_ = 0;
+  int64_t frames_published_ = 0;  // publish calls LCM accepted (frame numbers 0 .. frame_number_-1)
   std::map<std::string, ModuleWatch> watch_;
   std::vector<Drill> drill_log_;
   bool killing_ = false;
@@ -339,7 +354,7 @@ int Soak::report() {
             << frame_number_ << " frames published" << (drill_ ? ", fault drill" : "") << "\n";
   std::cout << "module       pid(s)        RSS start->end MB   HWM end MB  received published dropped errors "
                "restarts worst-hb-gap s\n";
-  for (const auto& name : kModules) {
+  for (const auto& name : watched()) {
     const ModuleWatch& w = watch_.at(name);
     std::ostringstream pids;
     for (int p : w.pids) pids << (pids.tellp() ? "," : "") << p;
@@ -352,7 +367,7 @@ int Soak::report() {
     std::cout << line;
   }
   std::cout << "checks:\n";
-  for (const auto& name : kModules) {
+  for (const auto& name : watched()) {
     const ModuleWatch& w = watch_.at(name);
     check(w.mem_end.rss_kb > 0 && w.mem_end.rss_kb <= w.mem_start.rss_kb * max_rss_growth_ + 20 * 1024,
           name + ": resident memory bounded (end " + std::to_string(w.mem_end.rss_kb / 1024) + " MB <= " +
@@ -363,7 +378,7 @@ int Soak::report() {
       check(b <= 10 && b >= -10, name + ": no queue growth (received - published - dropped = " + std::to_string(b) +
                                      " at the end, " + std::to_string(w.backlog_mid) + " at mid-run)");
     }
-    if (!drill_) check(w.pids.size() == 1, name + ": one process for the whole run (never restarted)");
+    if (!drill_ || name == kLogger) check(w.pids.size() == 1, name + ": one process for the whole run (never restarted)");
   }
   // Queue growth, end to end: prediction ages in the first and last fifth of the run.
   auto median_age = [&](double from, double to) {
@@ -395,6 +410,19 @@ int Soak::report() {
                                     std::to_string(w.pids.size()));
     }
   }
+  // The logger's own account of what it lost (its last heartbeat before the stop).
+  {
+    const heartbeat_t& lg = watch_.at(kLogger).last;
+    const double kernel = value_of(lg, "kernel_drops"), gaps = value_of(lg, "sequence_gaps");
+    std::cout << "logger: " << lg.received << " messages received, " << lg.published << " written, "
+              << value_of(lg, "bytes_written") / 1e6 << " MB in " << value_of(lg, "files") << " file(s), queue peak "
+              << value_of(lg, "queue_peak_bytes") / 1e6 << " MB, receive buffer " << value_of(lg, "rcvbuf_bytes") / 1e6
+              << " MB, status '" << lg.status << "'\n";
+    check(lg.dropped == 0 && lg.errors == 0 && kernel == 0 && gaps == 0,
+          "logger: nothing lost (" + std::to_string(lg.dropped) + " queue-full drops, " + std::to_string(int64_t(kernel)) +
+              " kernel drops on its socket, " + std::to_string(int64_t(gaps)) + " camera frame-number gaps, " +
+              std::to_string(lg.errors) + " write errors)");
+  }
   // The log.
   std::vector<fs::path> logs;
   for (const auto& e : fs::directory_iterator(out_dir_))
@@ -403,10 +431,19 @@ int Soak::report() {
   std::set<int64_t> logged;
   std::vector<int64_t> times;
   int64_t logged_messages = 0, corrupt = 0;
+  std::vector<bool> frame_logged(static_cast<size_t>(frame_number_), false);
+  const std::string image_channel = channel(kImageChannel);
   for (const auto& path : logs) {
     auto log = std::make_unique<lcm::LogFile>(path.string(), "r");
     if (!log->good()) continue;
     while (const lcm::LogEvent* ev = log->readNextEvent()) {
+      if (ev->channel == image_channel) {
+        image_t img{};
+        if (img.decode(ev->data, 0, ev->datalen) >= 0 && img.source == "soak" && img.frame_number >= 0 &&
+            img.frame_number < frame_number_)
+          frame_logged[static_cast<size_t>(img.frame_number)] = true;
+        continue;
+      }
       if (ev->channel != channel(kPredictionChannel)) continue;
       prediction_t p{};
       if (p.decode(ev->data, 0, ev->datalen) < 0) {
@@ -441,6 +478,11 @@ int Soak::report() {
   check(logged_messages >= published && published > 0,
         "log complete: " + std::to_string(logged_messages) + " logged >= " + std::to_string(published) +
             " published by the prediction processes (their heartbeats)");
+  const int64_t frames_logged = std::count(frame_logged.begin(), frame_logged.end(), true);
+  check(frames_published_ == frame_number_ && frames_logged == frame_number_,
+        "log complete: every camera frame published is logged (" + std::to_string(frames_logged) + " of " +
+            std::to_string(frame_number_) + ", " + std::to_string(frame_number_ - frames_published_) +
+            " refused by LCM at publish)");
   const double gap_limit = drill_ ? slowest_restart + 1.0 : 1.0;
   check(worst_gap <= gap_limit, "log: no gap between predictions longer than " + std::to_string(gap_limit) + " s (" +
                                     (drill_ ? "slowest restart + 1 s" : "no drill") + "): worst " + std::to_string(worst_gap) + " s");
