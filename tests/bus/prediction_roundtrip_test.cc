@@ -22,7 +22,9 @@ prediction_t from_core(const stack_t& s) {
   cs.block_height = s.block_height;
   cs.table_edge = s.table_edge;
   for (const auto& b : s.blocks) cs.blocks.push_back({b.id, b.row, b.x});
-  core::Prediction v = core::predict(cs);
+  core::PredictOptions options;
+  options.position_tolerance = prediction::kMeasuredPositionTolerance;  // the process's default
+  core::Prediction v = core::predict(cs, options);
   prediction_t p{};
   p.utime = s.utime;
   p.frame_number = s.frame_number;
@@ -32,6 +34,7 @@ prediction_t from_core(const stack_t& s) {
   p.score = v.score;
   p.annotator = v.annotator;
   p.solver = v.solver;
+  p.position_tolerance = v.position_tolerance;
   for (const auto& b : v.blocks) {
     block_prediction_t bp{};
     bp.id = b.id;

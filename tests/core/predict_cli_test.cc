@@ -103,3 +103,19 @@ TEST_CASE("cli: --jsonl answers line by line, an error object for a bad line, an
   const Run good = predict_cli("--jsonl -", std::string(kBalanced) + "\n" + kBalanced + "\n");
   CHECK(good.status == 0);
 }
+
+TEST_CASE("cli: --position-tolerance judges a measured knife edge as balanced, and says so") {
+  const std::string past = R"({"blocks": [{"id": 1, "row": 0, "x": -0.497}]})";  // centre 0.003 past the edge
+  Run exact = predict_cli("-", past);
+  REQUIRE(exact.status == 0);
+  CHECK_FALSE(nlohmann::json::parse(exact.out).at("balanced").get<bool>());
+  CHECK_FALSE(nlohmann::json::parse(exact.out).contains("position_tolerance"));
+  Run measured = predict_cli("--position-tolerance 0.005 -", past);
+  REQUIRE(measured.status == 0);
+  const auto j = nlohmann::json::parse(measured.out);
+  CHECK(j.at("balanced").get<bool>());
+  CHECK(j.at("position_tolerance").get<double>() == 0.005);
+  Run bad = predict_cli("--position-tolerance -1 -", past);
+  CHECK(bad.status == 2);
+  CHECK(bad.err.find("--position-tolerance") != std::string::npos);
+}

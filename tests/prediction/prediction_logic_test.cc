@@ -11,6 +11,7 @@
 using namespace bricklayer;
 using prediction::PredictionConfig;
 using prediction::PredictionLogic;
+using prediction::kMeasuredPositionTolerance;
 
 namespace {
 
@@ -161,6 +162,33 @@ TEST_CASE("a bad configuration is rejected up front") {
   config.max_blocks = 10;
   config.solver = "cplex";
   CHECK_THROWS_AS(PredictionLogic(config), std::invalid_argument);
+  config.solver = "clp";
+  config.position_tolerance = -0.001;
+  CHECK_THROWS_AS(PredictionLogic(config), std::invalid_argument);
+  config.position_tolerance = 0.5;
+  CHECK_THROWS_AS(PredictionLogic(config), std::invalid_argument);
+}
+
+TEST_CASE("measured positions get the default allowance, recorded in every answer") {
+  PredictionLogic measured(PredictionConfig{});
+  PredictionConfig exact_config;
+  exact_config.position_tolerance = 0.0;
+  PredictionLogic exact(exact_config);
+  // A single block's knife edge is its centre over the surface edge (x = -0.5).
+  const double t = kMeasuredPositionTolerance;
+  for (double past : {0.2 * t, 0.9 * t}) {
+    INFO("centre " << past << " past the edge");
+    CHECK(measured.answer(one_block(-0.5 + past)).balanced);
+    CHECK_FALSE(exact.answer(one_block(-0.5 + past)).balanced);
+  }
+  const prediction_t over = measured.answer(one_block(-0.5 + 1.5 * t));
+  CHECK_FALSE(over.balanced);
+  CHECK(over.blocks.at(0).state == block_prediction_t::STATE_CAUSE);
+  CHECK(over.position_tolerance == t);
+  CHECK(exact.answer(one_block(-0.6)).position_tolerance == 0.0);
+  bricklayer::stack_t none = one_block(-0.6);
+  none.status = bricklayer::stack_t::STATUS_NO_FRAME;
+  CHECK(measured.answer(none).position_tolerance == t);  // failures say the configuration too
 }
 
 TEST_CASE("answers are a pure function of the stack: same bytes every time, for every annotator") {

@@ -70,9 +70,10 @@ struct Recording {
 };
 
 // A run of a live prediction process as its log would show it: every stack answered.
-Recording record(const std::string& annotator, int n) {
+Recording record(const std::string& annotator, int n, double position_tolerance = prediction::kMeasuredPositionTolerance) {
   prediction::PredictionConfig config;
   config.annotator = annotator;
+  config.position_tolerance = position_tolerance;
   prediction::PredictionLogic logic(config);
   Recording r;
   for (int i = 1; i <= n; ++i) {
@@ -174,6 +175,26 @@ TEST_CASE("the replay adopts the recorded annotator unless one is given") {
     CHECK(report.mismatches == 30);  // at least the annotator field differs in each
     CHECK(out.str().find("annotator paper (log) vs exact (replay)") != std::string::npos);
   }
+}
+
+TEST_CASE("the replay adopts the recorded position tolerance unless one is given") {
+  std::string path = temp_log("tolerance.lcm");
+  write(path, record("exact", 20, 0.02));
+  {
+    replay::PredictionReplay module("", "", 1000);
+    std::ostringstream out;
+    auto report = replay::replay_log(path, module, true, out);
+    CHECK(module.config().position_tolerance == 0.02);
+    CHECK(report.mismatches == 0);
+  }
+  {
+    replay::PredictionReplay module("", "", 1000, 0.0);  // re-judged as exact positions: a choice
+    std::ostringstream out;
+    auto report = replay::replay_log(path, module, true, out);
+    CHECK(report.mismatches == 20);  // at least the recorded tolerance differs in each
+    CHECK(out.str().find("position_tolerance 0.02") != std::string::npos);
+  }
+  CHECK_THROWS_AS(replay::PredictionReplay("", "", 1000, -0.1), std::invalid_argument);
 }
 
 TEST_CASE("an unreadable log is an error") {

@@ -4,7 +4,7 @@
 
 namespace bricklayer::core {
 
-ContactGraph build_contacts(const Stack& stack) {
+ContactGraph build_contacts(const Stack& stack, double position_tolerance) {
   ContactGraph g;
   const size_t n = stack.blocks.size();
   g.height = stack.block_height / stack.block_length;
@@ -25,7 +25,7 @@ ContactGraph build_contacts(const Stack& stack) {
   }
   auto add = [&](int upper, int lower, double left, double right) {
     const int index = static_cast<int>(g.contacts.size());
-    g.contacts.push_back({upper, lower, left, right});
+    g.contacts.push_back({upper, lower, left - position_tolerance, right + position_tolerance});
     g.supports[static_cast<size_t>(upper)].push_back(index);
     if (lower != kSurface) g.carries[static_cast<size_t>(lower)].push_back(index);
   };

@@ -353,9 +353,14 @@ int32_t score_of(double overhang_in_block_lengths) {
 }
 
 Prediction predict(const Stack& stack, const PredictOptions& options) {
+  if (!(options.position_tolerance >= 0.0 && options.position_tolerance <= kMaxPositionTolerance)) {
+    throw std::invalid_argument("position tolerance " + std::to_string(options.position_tolerance) +
+                                " block lengths is outside [0, " + std::to_string(kMaxPositionTolerance) + "]");
+  }
   validate(stack, options.limits);
-  const ContactGraph graph = build_contacts(stack);
+  const ContactGraph graph = build_contacts(stack, options.position_tolerance);
   Prediction p;
+  p.position_tolerance = options.position_tolerance;
   p.annotator = to_string(options.annotator);
   p.solver = options.solver;
   fill_common(stack, p);
@@ -380,6 +385,7 @@ nlohmann::json to_json(const Prediction& p) {
   out["annotator"] = p.annotator;
   out["solver"] = p.solver;
   if (!p.qp.empty()) out["qp"] = p.qp;
+  if (p.position_tolerance > 0.0) out["position_tolerance"] = p.position_tolerance;
   nlohmann::json blocks = nlohmann::json::array();
   for (const auto& b : p.blocks) {
     static const char* const kStates[] = {"stable", "moving", "cause"};

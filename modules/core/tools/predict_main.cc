@@ -37,6 +37,8 @@ int Main(int argc, char** argv) {
   flags.add("solver", "clp", "LP backend of the paper and balance annotators (and of --lp-first): clp | nlopt");
   flags.add("qp", "nnls", "exact annotator's QP: nnls | nlopt");
   flags.add("max-blocks", "2000", "reject stacks with more blocks than this");
+  flags.add("position-tolerance", "0",
+            "block lengths a position may be off (measured stacks): contact intervals widened by this at both ends");
   flags.add_bool("jsonl", "one stack per input line, one result per output line");
   flags.add_bool("lp-first", "exact annotator: ask the LP backend (--solver) whether the pile is balanced before the QP");
   flags.add_positional("FILE", "stack file, or - for stdin");
@@ -51,6 +53,11 @@ int Main(int argc, char** argv) {
   }
   options.solver = flags.get("solver");
   options.lp_first = flags.get_bool("lp-first");
+  options.position_tolerance = flags.get_double("position-tolerance");
+  if (!(options.position_tolerance >= 0.0 && options.position_tolerance <= bricklayer::core::kMaxPositionTolerance)) {
+    throw bricklayer::FlagError("--position-tolerance must be in [0, " +
+                                std::to_string(bricklayer::core::kMaxPositionTolerance) + "]");
+  }
   if (options.solver != "clp" && options.solver != "nlopt") {
     throw bricklayer::FlagError("--solver: unknown solver \"" + options.solver + "\" (expected clp or nlopt)");
   }

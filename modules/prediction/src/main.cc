@@ -86,6 +86,8 @@ int Main(int argc, char** argv) {
   flags.add("annotator", "exact", "which blocks are red: exact (initial-acceleration causes), paper, balance");
   flags.add("solver", "clp", "LP backend of the core: clp or nlopt");
   flags.add("max-blocks", "1000", "larger stacks get STATUS_INVALID_STACK; larger messages are rejected");
+  flags.add("position-tolerance", std::to_string(prediction::kMeasuredPositionTolerance),
+            "block lengths a measured position may be off; contact intervals are widened by this (0 = exact)");
   flags.add("lcm-url", "", "LCM URL (default: LCM_DEFAULT_URL, else host-only udpm ttl=0)");
   flags.add("log-level", "info", "debug, info, warn or error");
   if (!flags.parse(argc, argv)) return 0;
@@ -93,13 +95,14 @@ int Main(int argc, char** argv) {
   prediction::PredictionConfig config;
   config.annotator = flags.get("annotator");
   config.solver = flags.get("solver");
+  config.position_tolerance = flags.get_double("position-tolerance");
   int64_t max_blocks = flags.get_int("max-blocks");
   if (max_blocks < 1 || max_blocks > 100000) throw FlagError("--max-blocks must be between 1 and 100000");
   config.max_blocks = static_cast<size_t>(max_blocks);
   try {
     prediction::PredictionLogic check(config);
   } catch (const std::invalid_argument& e) {
-    throw FlagError(e.what());  // names the bad --annotator / --solver / --max-blocks
+    throw FlagError(e.what());  // names the bad --annotator / --solver / --max-blocks / --position-tolerance
   }
   std::string url = resolve_lcm_url(flags.get("lcm-url"));
   try {

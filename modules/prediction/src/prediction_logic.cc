@@ -21,6 +21,7 @@ prediction_t empty_answer(const stack_t& stack, const PredictionConfig& config, 
   p.score = 0;
   p.annotator = config.annotator;
   p.solver = config.solver;
+  p.position_tolerance = config.position_tolerance;
   p.num_blocks = 0;
   return p;
 }
@@ -44,6 +45,11 @@ PredictionLogic::PredictionLogic(PredictionConfig config, Predictor predictor)
   }
   options_.solver = config_.solver;
   options_.limits.max_blocks = config_.max_blocks;
+  if (!(config_.position_tolerance >= 0.0 && config_.position_tolerance <= core::kMaxPositionTolerance)) {
+    throw std::invalid_argument("--position-tolerance must be in [0, " + std::to_string(core::kMaxPositionTolerance) +
+                                "] block lengths");
+  }
+  options_.position_tolerance = config_.position_tolerance;
   if (!predictor_) predictor_ = [](const core::Stack& s, const core::PredictOptions& o) { return core::predict(s, o); };
 }
 

@@ -27,6 +27,7 @@ int Main(int argc, char** argv) {
   flags.add("annotator", "", "prediction: annotator (default: the one recorded in the log, else exact)");
   flags.add("solver", "", "prediction: LP backend (default: the one recorded in the log, else clp)");
   flags.add("max-blocks", "1000", "prediction: the live process's --max-blocks");
+  flags.add("position-tolerance", "", "prediction: block lengths (default: the one recorded in the log, else 0.005)");
   flags.add("log-level", "info", "debug, info, warn or error");
   if (!flags.parse(argc, argv)) return 0;
   log::set_module("replay");
@@ -38,16 +39,19 @@ int Main(int argc, char** argv) {
 
   std::unique_ptr<replay::PredictionReplay> module;
   try {
+    std::optional<double> tolerance;
+    if (!flags.get("position-tolerance").empty()) tolerance = flags.get_double("position-tolerance");
     module = std::make_unique<replay::PredictionReplay>(flags.get("annotator"), flags.get("solver"),
-                                                        static_cast<size_t>(max_blocks));
+                                                        static_cast<size_t>(max_blocks), tolerance);
   } catch (const std::invalid_argument& e) {
-    throw FlagError(e.what());  // names the bad --annotator / --solver
+    throw FlagError(e.what());  // names the bad --annotator / --solver / --position-tolerance
   }
   auto t0 = std::chrono::steady_clock::now();
   replay::ReplayReport report = replay::replay_log(flags.positional()[0], *module, flags.get_bool("check"), std::cout);
   double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << "replay: module " << module->name() << ", annotator " << module->config().annotator << ", solver "
-            << module->config().solver << ", " << report.inputs << " inputs in " << seconds << " s\n";
+            << module->config().solver << ", position tolerance " << module->config().position_tolerance << ", "
+            << report.inputs << " inputs in " << seconds << " s\n";
   std::cout << report.summary() << std::endl;
   return report.ok() ? 0 : 1;
 }

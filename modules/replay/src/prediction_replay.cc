@@ -22,10 +22,13 @@ void diff(std::ostringstream& out, int& n, const std::string& what, const T& rec
 
 }  // namespace
 
-PredictionReplay::PredictionReplay(std::string annotator, std::string solver, size_t max_blocks)
-    : annotator_fixed_(!annotator.empty()), solver_fixed_(!solver.empty()) {
+PredictionReplay::PredictionReplay(std::string annotator, std::string solver, size_t max_blocks,
+                                   std::optional<double> position_tolerance)
+    : annotator_fixed_(!annotator.empty()), solver_fixed_(!solver.empty()),
+      tolerance_fixed_(position_tolerance.has_value()) {
   if (annotator_fixed_) config_.annotator = annotator;
   if (solver_fixed_) config_.solver = solver;
+  if (tolerance_fixed_) config_.position_tolerance = *position_tolerance;
   config_.max_blocks = max_blocks;
   prediction::PredictionLogic check(config_);  // reject a bad annotator now
 }
@@ -34,7 +37,7 @@ std::vector<std::string> PredictionReplay::input_channels() const { return {chan
 std::vector<std::string> PredictionReplay::output_channels() const { return {channel(kPredictionChannel)}; }
 
 void PredictionReplay::observe_recorded(const std::string&, const Bytes& bytes) {
-  if (logic_ || (annotator_fixed_ && solver_fixed_)) return;
+  if (logic_ || (annotator_fixed_ && solver_fixed_ && tolerance_fixed_)) return;
   auto p = decode_prediction(bytes);
   if (!p || p->status != prediction_t::STATUS_OK) return;
   // Adopt the recorded configuration, so a log made with --annotator paper checks as such. The
@@ -48,6 +51,17 @@ void PredictionReplay::observe_recorded(const std::string&, const Bytes& bytes) 
       annotator_fixed_ = true;
     } catch (const std::exception&) {
       // an annotator this build does not know: keep the default; mismatches will say so
+    }
+  }
+  if (!tolerance_fixed_) {
+    prediction::PredictionConfig candidate = config_;
+    candidate.position_tolerance = p->position_tolerance;
+    try {
+      prediction::PredictionLogic check(candidate);
+      config_ = candidate;
+      tolerance_fixed_ = true;
+    } catch (const std::exception&) {
+      // out of range: keep the default; mismatches will say so
     }
   }
   if (!solver_fixed_) {
@@ -95,6 +109,7 @@ std::string PredictionReplay::describe_difference(const std::string&, const Byte
   diff(out, n, "score", a->score, b->score);
   diff(out, n, "annotator", a->annotator, b->annotator);
   diff(out, n, "solver", a->solver, b->solver);
+  diff(out, n, "position_tolerance", a->position_tolerance, b->position_tolerance);
   diff(out, n, "num_blocks", a->num_blocks, b->num_blocks);
   for (size_t i = 0; i < std::min(a->blocks.size(), b->blocks.size()); ++i) {
     const auto& x = a->blocks[i];

@@ -38,6 +38,10 @@ struct ContactGraph {
 };
 
 // Normalises (x - table_edge) / block_length and finds every contact in O(n log n). Does not validate.
-ContactGraph build_contacts(const Stack& stack);
+// position_tolerance (block lengths, >= 0): how far a measured position may be off. Each contact interval is
+// widened by it at both ends (a support force may act up to that far beyond the measured end of a contact,
+// the surface edge included), so a pile that would be balanced with its blocks moved by about that much reads
+// balanced. Whether two blocks touch is still decided on the measured overlap. 0 = the positions are exact.
+ContactGraph build_contacts(const Stack& stack, double position_tolerance = 0.0);
 
 }  // namespace bricklayer::core

@@ -37,8 +37,16 @@ struct PredictOptions {
   // O(n) two-point certificate answers most balanced piles and the warm-started NNLS is faster than CLP
   // for the rest (README "Choices by measurement").
   bool lp_first = false;
+  // How far a measured block position may be off, block lengths (0 <= t <= kMaxPositionTolerance): contact
+  // intervals are widened by t at both ends (build_contacts), so a zero-margin pile measured a little past its
+  // knife edge still reads balanced. 0 (the default) judges the positions as exact. bricklayer-prediction
+  // sets it for measured stacks; see modules/core/README.md "Tolerance policy".
+  double position_tolerance = 0.0;
   StackLimits limits;
 };
+
+// Larger tolerances would call clearly overhanging blocks balanced; predict() refuses them.
+inline constexpr double kMaxPositionTolerance = 0.05;
 
 struct BlockVerdict {
   int64_t id = 0;
@@ -55,6 +63,7 @@ struct Prediction {
   std::string annotator;
   std::string solver;
   std::string qp;  // exact annotator: "nnls" or "nlopt"; empty when no QP was solved
+  double position_tolerance = 0.0;  // the PredictOptions::position_tolerance it was judged with
 
   std::vector<int64_t> causes() const;  // ids of red blocks
   std::vector<int64_t> moving() const;  // ids with a nonzero initial acceleration (causes included)
@@ -66,8 +75,9 @@ class SolverError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Validates (StackError) and predicts (SolverError on backend failure). Deterministic: the same stack
-// and options give bit-identical output.
+// Validates (StackError) and predicts (SolverError on backend failure; std::invalid_argument for a
+// position_tolerance outside [0, kMaxPositionTolerance]). Deterministic: the same stack and options give
+// bit-identical output.
 Prediction predict(const Stack& stack, const PredictOptions& options = {});
 
 // Minimum total equilibrium violation (see kBalanceTolerance) with the given LP backend; blocks whose free

@@ -13,9 +13,17 @@
 
 namespace bricklayer::prediction {
 
+// How far vision's measured positions may be off, block lengths. Simcam frames measure to a p95 of 0.0015-0.0024
+// at the harshest nuisance level (modules/vision/README.md); zero-margin optima (every known optimum, every
+// harmonic stack) measured that far past their knife edge would otherwise flicker red while the real pile stands.
+// 0.005 is about twice that p95 (0.3 px at 60 px per block) and well under the smallest push a player can make
+// on purpose. Recorded in every prediction_t, so a replay judges with the same value.
+inline constexpr double kMeasuredPositionTolerance = 0.005;
+
 struct PredictionConfig {
   std::string annotator = "exact";  // exact, paper or balance (core::parse_annotator)
   std::string solver = "clp";       // LP backend passed to core::predict
+  double position_tolerance = kMeasuredPositionTolerance;  // core::PredictOptions::position_tolerance
   size_t max_blocks = 1000;         // larger stacks are answered with STATUS_INVALID_STACK
 };
 
@@ -28,7 +36,8 @@ class PredictionLogic {
   // The core call; replaceable so a test can make it fail (default: core::predict).
   using Predictor = std::function<core::Prediction(const core::Stack&, const core::PredictOptions&)>;
 
-  // Throws std::invalid_argument for an unknown annotator or solver, or a max_blocks of 0.
+  // Throws std::invalid_argument for an unknown annotator or solver, a max_blocks of 0, or a position
+  // tolerance outside [0, core::kMaxPositionTolerance].
   explicit PredictionLogic(PredictionConfig config, Predictor predictor = {});
 
   // Always answers: failures become a status and a one-line error, never an exception.

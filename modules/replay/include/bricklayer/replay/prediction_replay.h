@@ -10,8 +10,10 @@ namespace bricklayer::replay {
 
 class PredictionReplay : public ReplayModule {
  public:
-  // annotator/solver: "" = adopt what the recorded predictions say (else the process defaults).
-  PredictionReplay(std::string annotator, std::string solver, size_t max_blocks);
+  // annotator/solver: "" = adopt what the recorded predictions say (else the process defaults); the same for
+  // position_tolerance when not given (so a log re-judged with another tolerance is a choice, not an accident).
+  PredictionReplay(std::string annotator, std::string solver, size_t max_blocks,
+                   std::optional<double> position_tolerance = std::nullopt);
 
   std::string name() const override { return "prediction"; }
   std::vector<std::string> input_channels() const override;
@@ -27,7 +29,7 @@ class PredictionReplay : public ReplayModule {
 
  private:
   prediction::PredictionConfig config_;
-  bool annotator_fixed_, solver_fixed_;
+  bool annotator_fixed_, solver_fixed_, tolerance_fixed_;
   std::optional<prediction::PredictionLogic> logic_;
 };
 
