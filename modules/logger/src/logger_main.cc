@@ -236,7 +236,11 @@ int Main(int argc, char** argv) {
 
   LoggerConfig c;
   c.url = resolve_lcm_url(f.get("lcm-url"));
-  check_lcm_url(c.url);
+  try {
+    check_lcm_url(c.url);
+  } catch (const std::invalid_argument& e) {
+    throw FlagError(e.what());  // a bad URL is a bad argument: exit 2
+  }
   const int64_t rotate = f.get_int("rotate");
   if (rotate < 0 || rotate > 100000) throw FlagError("--rotate must be between 0 and 100000, got " + std::to_string(rotate));
   const double split_mb = f.get_double("split-mb");
