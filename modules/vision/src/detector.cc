@@ -6,6 +6,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "bricklayer/vision/publishable.h"
+
 namespace bricklayer::vision {
 namespace {
 
@@ -362,20 +364,13 @@ Detection Detector::detect(const cv::Mat& frame) {
     const double right = p.shared_right ? p.right - 0.5 * line_width : p.right;
     DetectedBlock blk;
     blk.row = p.row;
-    blk.left_px = 0.5 * (left + right) - 0.5 * length;
-    blk.x = (blk.left_px - g.edge_x_px) / length;
+    blk.x = (0.5 * (left + right) - 0.5 * length - g.edge_x_px) / length;
     const double contrast = p.depth / (2.0 * config_.min_depth);
     blk.confidence = std::clamp(std::min(1.0, contrast) * (1.0 - p.err / tol), 0.0, 1.0);
-    const double bottom = g.surface_y_px - p.row * g.block_height_px, top = bottom - g.block_height_px;
-    const double right_px = blk.left_px + length;
-    const cv::Point2d corners[4] = {{blk.left_px, bottom}, {right_px, bottom}, {right_px, top}, {blk.left_px, top}};
-    for (int c = 0; c < 4; ++c) {
-      const cv::Point2d q = frame_.to_camera(corners[c]);
-      blk.corner_u[c] = q.x;
-      blk.corner_v[c] = q.y;
-    }
+    place_block(blk, frame_);
     out.blocks.push_back(blk);
   }
+  out.published = make_publishable(out.blocks, [](DetectedBlock& b) -> DetectedBlock& { return b; }, frame_, frame.size());
   return out;
 }
 

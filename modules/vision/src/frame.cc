@@ -221,9 +221,11 @@ std::string to_predict_json(const Detection& detection, const BoardFrame& frame)
   j["block_height"] = block_height_blocks(frame);
   j["table_edge"] = 0.0;
   j["blocks"] = nlohmann::json::array();
+  // x unrounded: rounding two touching blocks independently can make them overlap by 1e-6, which the
+  // predictor rejects.
   for (size_t i = 0; i < detection.blocks.size(); ++i) {
     const DetectedBlock& b = detection.blocks[i];
-    j["blocks"].push_back({{"id", static_cast<int64_t>(i)}, {"row", b.row}, {"x", std::round(b.x * 1e6) / 1e6}});
+    j["blocks"].push_back({{"id", static_cast<int64_t>(i)}, {"row", b.row}, {"x", b.x}});
   }
   return j.dump();
 }

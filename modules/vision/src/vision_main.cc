@@ -5,8 +5,10 @@
 //             colour mixing), BL_PROJECTOR (projector_state_t: what the projector shows, whose red/blue
 //             leakage into green is subtracted).
 // Publishes:  BL_STACK (stack_t, one per frame, carrying the frame's utime and frame_number;
-//             STATUS_NO_FRAME for a corrupt, empty, truncated or wrongly sized frame), BL_TIMING
-//             (timing_t, stage "detect"), BL_HEARTBEAT (counters; values: blocks, lines, rejected_wide).
+//             STATUS_NO_FRAME for a corrupt, empty, truncated or wrongly sized frame; never a stack
+//             bricklayer-prediction rejects: see publishable.h), BL_TIMING (timing_t, stage "detect"),
+//             BL_HEARTBEAT (counters; values: blocks, lines, rejected_wide, rejected_faint, and totals
+//             moved_total, dropped_overlap_total, dropped_border_total).
 // Offline:    --images DIR --json prints one bricklayer-predict input line per image (name order),
 //             without the bus and without temporal filtering.
 #include <algorithm>
@@ -33,6 +35,7 @@
 #include "bricklayer/timing_t.hpp"
 #include "bricklayer/vision/detector.h"
 #include "bricklayer/vision/frame.h"
+#include "bricklayer/vision/publishable.h"
 #include "bricklayer/vision/temporal_filter.h"
 
 namespace bricklayer::vision {
@@ -223,10 +226,16 @@ class Vision {
     } else if (d.status == Detection::kNoBoard) {
       out = to_stack_message(d, detector_.frame(), utime, frame_number);
     } else if (use_filter_) {
-      out = to_stack_message(filter_.update(d.blocks), detector_.frame(), utime, frame_number);
+      // The filter holds lost blocks and keeps positions inside its deadband: apply the publishing rules
+      // again to what it returns.
+      std::vector<FilteredBlock> blocks = filter_.update(d.blocks);
+      published_ += make_publishable(blocks, [](FilteredBlock& b) -> DetectedBlock& { return b.block; },
+                                     detector_.frame(), frame.size());
+      out = to_stack_message(blocks, detector_.frame(), utime, frame_number);
     } else {
       out = to_stack_message(d, detector_.frame(), utime, frame_number);
     }
+    published_ += d.published;
     const int64_t elapsed =
         std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - start).count();
     module_.publish(stack_channel_, out);
@@ -241,6 +250,11 @@ class Vision {
     module_.set_value("blocks", out.num_blocks);
     module_.set_value("lines", d.lines);
     module_.set_value("rejected_wide", d.rejected_wide);
+    module_.set_value("rejected_faint", d.rejected_faint);
+    // Totals since start: what the publishing rules changed (publishable.h).
+    module_.set_value("moved_total", published_.moved);
+    module_.set_value("dropped_overlap_total", published_.dropped_overlap);
+    module_.set_value("dropped_border_total", published_.dropped_border);
     module_.set_value("detect_ms", elapsed / 1000.0);
     module_.set_status(d.status == Detection::kNoBoard ? "board not visible" : "ok");
   }
@@ -260,6 +274,7 @@ class Vision {
   Latest<Frame> frames_;
   std::optional<calibration_t> calibration_;
   int64_t frames_seen_ = 0;
+  PublishCounts published_;
   std::string stack_channel_, timing_channel_;
 };
 

@@ -4,9 +4,11 @@
 //   green channel -> rectify -> per row band: average along the line direction (upper and lower half)
 //   -> subtract the projector's predicted leakage into green -> divide by a local background (1-D max
 //   filter + box smoothing: shadows, gradients and vignetting cancel) -> dark dips with sub-pixel
-//   centroids -> reject wide dips (out-of-focus hands and bodies) and dips missing from one half of the
-//   band (not a full-height line) -> pair lines one block length apart (a line may end one block and
-//   start the next when blocks touch) -> block x from the pair's midpoint, row from the band.
+//   centroids -> reject wide dips (out-of-focus hands and bodies), dips missing from one half of the
+//   band (not a full-height line) and dips much fainter than the frame's median line (shadow-edge
+//   slopes, leakage residue) -> pair lines one block length apart (a line may end one block and start
+//   the next when blocks touch) -> block x from the pair's midpoint, row from the band -> the publishing
+//   rules of publishable.h (no overlaps in a row, nothing cut by the image border).
 // Pure function of (frame, calibration, projector image): deterministic, no state between frames.
 #pragma once
 
@@ -47,6 +49,18 @@ struct DetectedBlock {
   double confidence = 0.0;         // 0..1
 };
 
+// What make_publishable (publishable.h) changed so a stack is one prediction accepts.
+struct PublishCounts {
+  int moved = 0;            // blocks moved (by at most kMaxSnapOverlap) so touching blocks do not overlap
+  int dropped_overlap = 0;  // blocks dropped for overlapping a better-supported block by more than that
+  int dropped_border = 0;   // blocks not whole inside the camera image (or with a non-finite position)
+
+  PublishCounts& operator+=(const PublishCounts& o) {
+    moved += o.moved, dropped_overlap += o.dropped_overlap, dropped_border += o.dropped_border;
+    return *this;
+  }
+};
+
 struct Detection {
   enum Status { kOk = 0, kNoFrame = 1, kNoBoard = 2 };
   Status status = kOk;
@@ -54,6 +68,7 @@ struct Detection {
   int lines = 0;                      // accepted line profiles
   int rejected_wide = 0;              // dark dips rejected as out of focus
   int rejected_faint = 0;             // dips much fainter than the frame's typical line (shadow edges, noise)
+  PublishCounts published;            // blocks moved or dropped so prediction accepts the stack
   struct Line {
     int row;
     double x_px, depth;  // centroid in the rectified frame; darkness relative to the background
