@@ -21,6 +21,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "../common/spawn_util.h"
+#include "bricklayer/calibration/calibration_file.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/module.h"
 #include "bricklayer/core/predict.h"
@@ -37,12 +38,13 @@ namespace fs = std::filesystem;
 namespace {
 constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
-std::string run_capture(const std::string& command) {
+std::string run_capture(const std::string& command, int* exit_code = nullptr) {
   std::string out;
   FILE* p = popen(command.c_str(), "r");
   std::array<char, 4096> buf{};
   while (p && fgets(buf.data(), buf.size(), p)) out += buf.data();
-  if (p) pclose(p);
+  const int status = p ? pclose(p) : -1;
+  if (exit_code) *exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return out;
 }
 }  // namespace
@@ -82,6 +84,40 @@ TEST_CASE("offline --json prints one predict-input stack per image, in name orde
       CHECK(got.blocks[k].x == Approx(stacks[i].blocks[k].x).margin(0.02));
     }
   }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("vision takes bricklayer-calibrate's calibration file and refuses a malformed one naming the problem") {
+  fs::path dir = fs::temp_directory_path() / ("bricklayer-vision-calibration-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "images");
+  core::Stack stack;
+  stack.blocks = {{1, 0, -2.5}, {2, 0, -1.2}, {3, 1, -1.9}};
+  simcam::Renderer renderer;
+  cv::imwrite((dir / "images" / "frame0.png").string(), renderer.render(stack, simcam::Nuisance::level(1), nullptr, 3).bgr);
+  // The default calibration describes the default camera simcam renders: same blocks through the calibrated path.
+  calibration::save_calibration((dir / "calibration.json").string(), calibration::default_calibration());
+  int code = -1;
+  std::string out = run_capture(test::program("bricklayer-vision") + " --images " + (dir / "images").string() +
+                                    " --calibration " + (dir / "calibration.json").string() + " --json",
+                                &code);
+  INFO(out);
+  CHECK(code == 0);
+  const core::Stack got = core::stack_from_json(nlohmann::json::parse(out));
+  REQUIRE(got.blocks.size() == 3);
+  for (size_t k = 0; k < 3; ++k) {
+    CHECK(got.blocks[k].row == stack.blocks[k].row);
+    CHECK(got.blocks[k].x == Approx(stack.blocks[k].x).margin(0.02));
+  }
+  // Strict: a key missing is an error naming the file and the key, and nothing is detected.
+  std::ofstream(dir / "bad.json") << R"({"format": "bricklayer-calibration", "version": 1, "camera_width": 640})";
+  out = run_capture(test::program("bricklayer-vision") + " --images " + (dir / "images").string() + " --calibration " +
+                        (dir / "bad.json").string() + " --json 2>&1",
+                    &code);
+  INFO(out);
+  CHECK(code != 0);
+  CHECK(out.find("bad.json") != std::string::npos);
+  CHECK(out.find("\"blocks\"") == std::string::npos);
   fs::remove_all(dir);
 }
 

@@ -18,13 +18,13 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 
+#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/camera/frame_source.h"
 #include "bricklayer/common/board.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/flags.h"
@@ -43,25 +43,6 @@ namespace {
 
 constexpr const char* kModuleName = "vision";
 
-std::vector<std::filesystem::path> list_images(const std::string& dir) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw std::runtime_error("--images: '" + dir + "' is not a directory");
-  std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    if (!entry.is_regular_file()) continue;
-    std::string ext = entry.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".pgm" || ext == ".ppm" ||
-        ext == ".tif" || ext == ".tiff")
-      files.push_back(entry.path());
-  }
-  std::sort(files.begin(), files.end(), [](const fs::path& a, const fs::path& b) {
-    return a.filename().string() < b.filename().string();
-  });
-  return files;
-}
-
 cv::Mat read_image_file(const std::filesystem::path& path) {
   try {
     return cv::imread(path.string(), cv::IMREAD_COLOR);
@@ -73,7 +54,7 @@ cv::Mat read_image_file(const std::filesystem::path& path) {
 // --images DIR --json: one predict-input line per image, no bus, no filter.
 int run_offline(const std::string& dir, Detector& detector) {
   int failures = 0;
-  for (const auto& path : list_images(dir)) {
+  for (const auto& path : camera::list_image_files(dir)) {
     const cv::Mat frame = read_image_file(path);
     Detection d;
     if (frame.empty()) {
@@ -92,58 +73,16 @@ int run_offline(const std::string& dir, Detector& detector) {
   return failures == 0 ? 0 : 1;
 }
 
-// Frames read in-process (camera, video, folder), instead of from the bus.
-class DirectSource {
- public:
-  virtual ~DirectSource() = default;
-  // Next frame, or empty when exhausted / failed; utime and frame number set.
-  virtual bool next(cv::Mat& frame, int64_t& utime, int64_t& frame_number) = 0;
-};
-
-class CaptureSource : public DirectSource {
- public:
-  CaptureSource(std::unique_ptr<cv::VideoCapture> cap, bool live) : cap_(std::move(cap)), live_(live) {}
-  bool next(cv::Mat& frame, int64_t& utime, int64_t& frame_number) override {
-    if (!cap_->read(frame) || frame.empty()) return false;
-    frame_number = count_++;
-    utime = live_ ? wall_utime() : static_cast<int64_t>(cap_->get(cv::CAP_PROP_POS_MSEC) * 1000.0);
-    return true;
-  }
-
- private:
-  std::unique_ptr<cv::VideoCapture> cap_;
-  bool live_;
-  int64_t count_ = 0;
-};
-
-class FolderSource : public DirectSource {
- public:
-  FolderSource(const std::string& dir, double rate) : files_(list_images(dir)), period_us_(1e6 / rate) {}
-  bool next(cv::Mat& frame, int64_t& utime, int64_t& frame_number) override {
-    if (index_ >= files_.size()) return false;
-    frame = read_image_file(files_[index_]);
-    frame_number = static_cast<int64_t>(index_);
-    utime = static_cast<int64_t>(index_ * period_us_);
-    ++index_;
-    return true;  // an unreadable file is a NO_FRAME stack, not the end
-  }
-
- private:
-  std::vector<std::filesystem::path> files_;
-  double period_us_;
-  size_t index_ = 0;
-};
-
 class Vision {
  public:
   Vision(const std::string& url, Detector detector, const TemporalFilterConfig& filter_config, bool filter,
-         std::unique_ptr<DirectSource> source, double rate)
+         std::unique_ptr<camera::FrameSource> source)
       : module_(kModuleName, url),
         detector_(std::move(detector)),
         filter_(filter_config),
         use_filter_(filter),
         source_(std::move(source)),
-        period_(std::chrono::microseconds(static_cast<int64_t>(1e6 / rate))),
+        period_(std::chrono::microseconds(source_ ? static_cast<int64_t>(1e6 / source_->rate()) : 0)),
         frames_(module_.counters()),
         stack_channel_(channel(kStackChannel)),
         timing_channel_(channel(kTimingChannel)) {
@@ -166,7 +105,9 @@ class Vision {
   void HandleImage(const image_t& image) { frames_.put({image, wall_utime()}); }
 
   void HandleCalibration(const calibration_t& calibration) {
-    detector_.set_calibration(calibration);  // throws on a bad calibration: counted error, previous kept
+    // Both throw on a bad calibration (a counted error; the previous calibration stays in use).
+    calibration::validate_calibration(calibration);
+    detector_.set_calibration(calibration);
     calibration_ = calibration;
     filter_.reset();
     log::info("calibration applied: board frame ", detector_.frame().size().width, "x",
@@ -186,17 +127,21 @@ class Vision {
 
   void Tick() {
     if (source_) {
-      if (std::chrono::steady_clock::now() < next_frame_ || source_done_) return;
+      // A live camera paces itself (next() waits for the newest frame); files are paced at their rate.
+      if (source_done_ || (!source_->live() && std::chrono::steady_clock::now() < next_frame_)) return;
       next_frame_ += period_;
       cv::Mat frame;
-      int64_t utime = 0, number = 0;
-      if (!source_->next(frame, utime, number)) {
+      if (!source_->next(frame)) {
         source_done_ = true;
-        log::info("source exhausted after ", frames_seen_, " frames");
+        log::info(source_->describe(), " exhausted after ", frames_seen_, " frames");
         module_.set_status("source exhausted");
         return;
       }
       ++module_.counters().received;
+      // Files carry no capture time: their utime is the frame's place in the sequence at the source's
+      // rate, so a replay of the same folder or video gives the same messages.
+      const int64_t number = source_frames_++;
+      const int64_t utime = source_->live() ? wall_utime() : static_cast<int64_t>(number * 1e6 / source_->rate());
       Process(frame, utime, number, wall_utime(), "");
       return;
     }
@@ -267,8 +212,9 @@ class Vision {
   Detector detector_;
   TemporalFilter filter_;
   bool use_filter_;
-  std::unique_ptr<DirectSource> source_;
+  std::unique_ptr<camera::FrameSource> source_;
   bool source_done_ = false;
+  int64_t source_frames_ = 0;
   std::chrono::steady_clock::duration period_;
   std::chrono::steady_clock::time_point next_frame_;
   Latest<Frame> frames_;
@@ -283,7 +229,7 @@ int Main(int argc, char** argv) {
   flags.add("lcm-url", "", "LCM URL (default: LCM_DEFAULT_URL, else host-only udpm ttl=0)");
   flags.add("log-level", "info", "debug, info, warn or error");
   flags.add("board", "", "board geometry JSON {edge_x_px, surface_y_px, block_length_px, block_height_px} used until a calibration arrives (default: the shared default setup)");
-  flags.add("calibration", "", "calibration file (JSON with calibration_t's fields, or an LCM-encoded calibration_t) to start with");
+  flags.add("calibration", "", "calibration file written by bricklayer-calibrate (calibration.json, loaded strictly) to start with");
   flags.add("camera", "", "read frames from this V4L2 camera (index or /dev/videoN) instead of BL_IMAGE");
   flags.add("video", "", "read frames from this video file instead of BL_IMAGE");
   flags.add("images", "", "read frames from the images in this folder (name order) instead of BL_IMAGE");
@@ -301,10 +247,12 @@ int Main(int argc, char** argv) {
   if (!flags.get("board").empty()) geometry = load_board_geometry(flags.get("board"));
   Detector detector(geometry);
   if (!flags.get("calibration").empty()) {
+    // The strict loader bricklayer-calibrate's files are checked with; its errors name the file and key.
+    const calibration_t loaded = calibration::load_calibration(flags.get("calibration"));
     try {
-      detector.set_calibration(load_calibration_json(flags.get("calibration")));
+      detector.set_calibration(loaded);
     } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(std::string("--calibration: ") + e.what());
+      throw std::runtime_error("--calibration " + flags.get("calibration") + ": " + e.what());
     }
   }
 
@@ -333,27 +281,19 @@ int Main(int argc, char** argv) {
   const double rate = flags.get_double("rate");
   if (!(rate > 0 && rate <= 1000)) throw FlagError("--rate must be in (0, 1000]");
 
-  std::unique_ptr<DirectSource> source;
+  std::unique_ptr<camera::FrameSource> source;
   if (!flags.get("camera").empty()) {
-    const std::string cam = flags.get("camera");
-    auto cap = std::make_unique<cv::VideoCapture>();
-    const bool numeric = !cam.empty() && std::all_of(cam.begin(), cam.end(), ::isdigit);
-    const bool ok = numeric ? cap->open(std::stoi(cam), cv::CAP_V4L2) : cap->open(cam, cv::CAP_V4L2);
-    if (!ok) throw std::runtime_error("cannot open camera '" + cam + "'");
-    cap->set(cv::CAP_PROP_BUFFERSIZE, 1);
-    source = std::make_unique<CaptureSource>(std::move(cap), true);
+    source = camera::open_camera(flags.get("camera"), 0, 0);
   } else if (!flags.get("video").empty()) {
-    auto cap = std::make_unique<cv::VideoCapture>(flags.get("video"));
-    if (!cap->isOpened()) throw std::runtime_error("cannot open video '" + flags.get("video") + "'");
-    source = std::make_unique<CaptureSource>(std::move(cap), false);
+    source = camera::open_video(flags.get("video"), rate, false);
   } else if (!flags.get("images").empty()) {
-    source = std::make_unique<FolderSource>(flags.get("images"), rate);
+    source = camera::open_folder(flags.get("images"), rate, false);
   }
 
   const std::string url = resolve_lcm_url(flags.get("lcm-url"));
   check_lcm_url(url);
   Module::install_signal_handlers();
-  Vision vision(url, std::move(detector), filter_config, !flags.get_bool("no-filter"), std::move(source), rate);
+  Vision vision(url, std::move(detector), filter_config, !flags.get_bool("no-filter"), std::move(source));
   return vision.Run();
 }
 

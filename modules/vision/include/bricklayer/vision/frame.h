@@ -39,9 +39,4 @@ stack_t no_frame_stack(const BoardFrame& frame, int64_t utime, int64_t frame_num
 // {"block_length":1,"block_height":h,"table_edge":0,"blocks":[{"id":0,"row":0,"x":-0.5},...]}.
 std::string to_predict_json(const Detection& detection, const BoardFrame& frame);
 
-// Reads a calibration saved as JSON with calibration_t's field names (arrays for the array fields).
-// Throws std::runtime_error naming the missing or malformed field.
-calibration_t load_calibration_json(const std::string& path);
-calibration_t parse_calibration_json(const std::string& text);
-
 }  // namespace bricklayer::vision
