@@ -110,7 +110,9 @@ BoardFrame BoardFrame::from_calibration(const calibration_t& c) {
 cv::Mat BoardFrame::rectify(const cv::Mat& camera) const {
   if (identity_) return camera;
   cv::Mat out;
-  cv::remap(camera, out, map1_, map2_, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+  // Beyond the camera's view the board is unknown, not black: replicating the border keeps a black wall
+  // from merging with the end line of a block just inside the view into one wide (rejected) dip.
+  cv::remap(camera, out, map1_, map2_, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
   return out;
 }
 
