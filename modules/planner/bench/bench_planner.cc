@@ -1,9 +1,17 @@
-// bricklayer-bench-planner: median and p99 of the collapse preview and of the next-block hint at 60 blocks
-// (12 staggered rows of 5, 40 jittered piles each; previews of the same walls with the top rows pushed
-// over the edge). Prints one line per measurement.
+// bricklayer-bench-planner: median and p99 of the collapse preview and of the next-block hint at 60 blocks.
+// Previews (40 seeded piles per kind, every pile unbalanced, verdicts from core::predict):
+//   wall    12 staggered rows of 5 with the top 4 rows pushed over the edge (the old single benchmark);
+//   stairs  a wide wall (6 rows of 10) whose rows step out over the edge: the overhanging steps collapse;
+//   tower   a tall single-column tower (60 rows) whose top 20-30 rows lean over their support and topple.
+// Hints: 12 staggered rows of 5 (balanced: extend; top row pushed out: rebalance). Prints one line per
+// measurement; `--preview-only` skips the hints, `--piles N` changes the number of piles per kind.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <string>
 #include <vector>
 
 #include "bricklayer/core/predict.h"
@@ -15,11 +23,12 @@ using namespace bricklayer;
 
 namespace {
 
-void report(const char* what, std::vector<double> ms) {
+void report(const std::string& what, std::vector<double> ms) {
   std::sort(ms.begin(), ms.end());
   const double median = ms[ms.size() / 2];
   const double p99 = ms[std::min(ms.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(ms.size())))];
-  std::printf("%-40s n=%3zu median %8.3f ms  p99 %8.3f ms  max %8.3f ms\n", what, ms.size(), median, p99, ms.back());
+  std::printf("%-44s n=%4zu median %8.3f ms  p99 %8.3f ms  max %8.3f ms\n", what.c_str(), ms.size(), median, p99,
+              ms.back());
 }
 
 template <typename F>
@@ -29,37 +38,113 @@ double time_ms(F f) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// A wide wall of `rows` rows of `per_row` blocks in brick bond whose rows step out over the edge by `step`
+// each (row 0 ends at the edge), jittered by the seed: the steps beyond the balance limit collapse.
+core::Stack stairs_pile(int rows, int per_row, double step, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> jitter(-0.04, 0.04), gap(0.0, 0.03);
+  core::Stack s;
+  int64_t id = 1;
+  for (int r = 0; r < rows; ++r) {
+    double x = step * r - 1.0 + jitter(rng);
+    for (int k = 0; k < per_row; ++k) {
+      s.blocks.push_back({id++, r, x});
+      x -= 1.0 + gap(rng);
+    }
+  }
+  return s;
+}
+
+// A single-column tower of `rows` blocks (centres 0.4 inside the edge, jittered); rows from `lean_from` up
+// are pushed right by `shift`, so the part above leans over its support and topples.
+core::Stack tower_pile(int rows, int lean_from, double shift, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> jitter(-0.03, 0.03);
+  core::Stack s;
+  for (int r = 0; r < rows; ++r) s.blocks.push_back({r + 1, r, -0.9 + jitter(rng) + (r >= lean_from ? shift : 0.0)});
+  return s;
+}
+
+struct PreviewStats {
+  std::vector<double> ms;
+  int moving = 0, ended = 0, steps = 0;
+  double end_time = 0.0;
+};
+
+void time_preview(const core::Stack& stack, PreviewStats& stats) {
+  const core::Prediction p = core::predict(stack);
+  if (p.balanced) {
+    std::fprintf(stderr, "bench pile is balanced: the generator needs fixing\n");
+    std::exit(1);
+  }
+  planner::CollapseInput input;
+  input.block_height = stack.block_height;
+  for (size_t i = 0; i < stack.blocks.size(); ++i) {
+    const bool moving = p.blocks[i].state != core::BlockState::kStable;
+    input.blocks.push_back({stack.blocks[i].row, stack.blocks[i].x, moving});
+    stats.moving += moving;
+  }
+  planner::CollapsePreview preview;
+  stats.ms.push_back(time_ms([&] { preview = planner::simulate_collapse(input); }));
+  stats.ended += preview.came_to_rest;
+  stats.steps += preview.steps;
+  stats.end_time += preview.times.back();
+}
+
 }  // namespace
 
-int main() {
-  constexpr int kPiles = 40;
-  std::vector<double> preview_ms, hint_ms, rebalance_ms;
-  int frames = 0, evaluations = 0;
-  for (int seed = 1; seed <= kPiles; ++seed) {
-    // Preview: the top 4 rows pushed 1.3 beyond the edge.
-    const core::Stack falling = planner::toppling_pile(12, 5, 4, 1.3 + 0.01 * seed, static_cast<uint64_t>(seed));
-    const core::Prediction p = core::predict(falling);
-    planner::CollapseInput input;
-    input.block_height = falling.block_height;
-    for (size_t i = 0; i < falling.blocks.size(); ++i)
-      input.blocks.push_back({falling.blocks[i].row, falling.blocks[i].x, p.blocks[i].state != core::BlockState::kStable});
-    planner::CollapsePreview preview;
-    preview_ms.push_back(time_ms([&] { preview = planner::simulate_collapse(input); }));
-    frames += static_cast<int>(preview.frames.size());
-
-    const core::Stack wall = planner::wall_pile(12, 5, static_cast<uint64_t>(seed), 0.3);
+int main(int argc, char** argv) {
+  int piles = 40;
+  bool hints = true;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--preview-only") == 0) {
+      hints = false;
+    } else if (std::strcmp(argv[i], "--piles") == 0 && i + 1 < argc) {
+      piles = std::atoi(argv[++i]);
+    } else {
+      std::fprintf(stderr, "usage: bricklayer-bench-planner [--preview-only] [--piles N]\n");
+      return 2;
+    }
+  }
+  if (piles < 1) {
+    std::fprintf(stderr, "--piles must be at least 1\n");
+    return 2;
+  }
+  PreviewStats wall, stairs, tower;
+  std::vector<double> hint_ms, rebalance_ms;
+  int evaluations = 0;
+  for (int seed = 1; seed <= piles; ++seed) {
+    const auto useed = static_cast<uint64_t>(seed);
+    time_preview(planner::toppling_pile(12, 5, 4, 1.3 + 0.01 * (seed % 40), useed), wall);
+    time_preview(stairs_pile(6, 10, 0.42 + 0.002 * (seed % 40), useed), stairs);
+    time_preview(tower_pile(60, 30 + seed % 10, 0.55 + 0.005 * (seed % 40), useed), tower);
+    if (!hints) continue;
+    const core::Stack balanced = planner::wall_pile(12, 5, useed, 0.3);
     planner::Hint hint;
-    hint_ms.push_back(time_ms([&] { hint = planner::next_block_hint(wall); }));
+    hint_ms.push_back(time_ms([&] { hint = planner::next_block_hint(balanced); }));
     evaluations += hint.evaluations;
-
-    const core::Stack tipping = planner::toppling_pile(12, 5, 1, 0.62, static_cast<uint64_t>(seed));
+    const core::Stack tipping = planner::toppling_pile(12, 5, 1, 0.62, useed);
     rebalance_ms.push_back(time_ms([&] { hint = planner::next_block_hint(tipping); }));
   }
-  std::printf("bricklayer-bench-planner: 60 blocks, %d piles each\n", kPiles);
-  report("collapse preview (simulate_collapse)", preview_ms);
-  report("hint, balanced pile (extend)", hint_ms);
-  report("hint, unbalanced pile (rebalance)", rebalance_ms);
-  std::printf("mean key frames per preview %.1f, mean predict() calls per extend hint %.1f\n",
-              static_cast<double>(frames) / kPiles, static_cast<double>(evaluations) / kPiles);
+  std::printf("bricklayer-bench-planner: 60 blocks, %d piles per kind\n", piles);
+  std::vector<double> all;
+  for (const auto* s : {&wall, &stairs, &tower}) all.insert(all.end(), s->ms.begin(), s->ms.end());
+  const struct {
+    const char* name;
+    const PreviewStats& stats;
+  } kinds[] = {{"wall, top 4 rows over the edge", wall}, {"stairs, wide wall stepping out", stairs},
+               {"tower, 60 rows, top part leaning", tower}};
+  for (const auto& k : kinds) {
+    report(std::string("collapse preview: ") + k.name, k.stats.ms);
+    const double n = static_cast<double>(k.stats.ms.size());
+    std::printf("    mean moving blocks %.1f, ended before max_time %d/%zu, mean steps %.0f, mean end %.2f time units\n",
+                k.stats.moving / n, k.stats.ended, k.stats.ms.size(), k.stats.steps / n, k.stats.end_time / n);
+  }
+  report("collapse preview: all kinds", all);
+  if (hints) {
+    report("hint, balanced pile (extend)", hint_ms);
+    report("hint, unbalanced pile (rebalance)", rebalance_ms);
+    std::printf("mean predict() calls per extend hint %.1f\n", static_cast<double>(evaluations) / piles);
+  }
   return 0;
 }

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace bricklayer::planner {
 namespace {
@@ -19,16 +21,30 @@ double dot(Vec a, Vec b) { return a.x * b.x + a.y * b.y; }
 double cross(Vec a, Vec b) { return a.x * b.y - a.y * b.x; }
 Vec cross(double w, Vec r) { return {-w * r.y, w * r.x}; }
 
+constexpr double kMargin = 0.02;     // contacts are found this far apart (speculative), plus what the pair moves in a step
+constexpr double kSlop = 0.002;      // penetration tolerated without correction
+constexpr double kBaumgarte = 0.2;   // fraction of the penetration (beyond the slop) corrected per step
+constexpr double kWakeSpeed = 0.3;   // approach speed at which a moving block wakes a sleeping one it strikes
+// A block that started moving (or was woken) is not put to sleep before this long: near the balance limit a
+// block tips with an angular acceleration of a few hundredths, slow enough to pass for still at first.
+constexpr double kMinAwake = 1.0;
+constexpr double kClearance = 0.1;   // a block sliding alone on the surface is this far from every other block
+
+enum class State : uint8_t { kAsleep, kAwake, kFalling };
+
 struct Body {
-  Vec c;            // centre
-  double angle = 0.0;
-  Vec v;
-  double w = 0.0;
+  Vec c, v;
+  double angle = 0.0, w = 0.0;
   double hx = 0.5, hy = 0.5;  // half extents
-  double inv_mass = 1.0, inv_inertia = 1.0;
-  bool awake = true;
-  bool left = false;
-  bool is_static = false;  // the surface
+  State state = State::kAsleep;
+  bool is_table = false;
+  bool ever_awake = false;
+  bool slid_away = false;
+  double awake_for = 0.0;  // time since it last woke
+  double still_for = 0.0;  // time its speed has stayed below rest_speed
+  double flat_for = 0.0;   // time its vertical speed and spin have stayed below rest_speed (sliding allowed)
+  double expand = 0.0;     // broad phase: half the contact margin plus how far it can move in one step
+  double lo_x = 0, hi_x = 0, lo_y = 0, hi_y = 0;  // bounding box of the vertices
   std::array<Vec, 4> vertices;  // world, counter-clockwise from bottom-left
   std::array<Vec, 4> normals;   // world outward normal of edge i (vertices i -> i+1)
 
@@ -37,21 +53,35 @@ struct Body {
     auto world = [&](double lx, double ly) { return Vec{c.x + cs * lx - sn * ly, c.y + sn * lx + cs * ly}; };
     vertices = {world(-hx, -hy), world(hx, -hy), world(hx, hy), world(-hx, hy)};
     normals = {Vec{sn, -cs}, Vec{cs, sn}, Vec{-sn, cs}, Vec{-cs, -sn}};
+    lo_x = hi_x = vertices[0].x;
+    lo_y = hi_y = vertices[0].y;
+    for (const Vec& p : vertices) {
+      lo_x = std::min(lo_x, p.x);
+      hi_x = std::max(hi_x, p.x);
+      lo_y = std::min(lo_y, p.y);
+      hi_y = std::max(hi_y, p.y);
+    }
   }
-  bool dynamic() const { return !is_static && awake; }
-  double im() const { return dynamic() ? inv_mass : 0.0; }
-  double ii() const { return dynamic() ? inv_inertia : 0.0; }
+  bool awake() const { return state == State::kAwake; }
+  bool in_pile() const { return state != State::kFalling; }
 };
 
+bool boxes_overlap(const Body& a, const Body& b, double grow) {
+  return a.lo_x - grow <= b.hi_x && b.lo_x - grow <= a.hi_x && a.lo_y - grow <= b.hi_y && b.lo_y - grow <= a.hi_y;
+}
+
 struct Contact {
-  int a = 0, b = 0;  // reference and incident body; the normal points from a to b
-  Vec n;
-  Vec ra, rb;
+  int a = 0, b = 0;   // reference and incident body; the normal points from a to b
+  uint64_t key = 0;   // body pair and contact feature, to find last step's impulse (warm start)
+  Vec n, ra, rb;
   double separation = 0.0;
   double approach = 0.0;  // normal velocity before the solve (negative: closing)
+  double rna = 0.0, rnb = 0.0;
+  double ima = 0.0, iia = 0.0, imb = 0.0, iib = 0.0;  // inverse mass and inertia, 0 for static bodies
   double mass = 0.0;
-  double target = 0.0;
+  double target = 0.0;  // normal velocity the solve aims for (closes a gap or pushes out a penetration)
   double impulse = 0.0;
+  int island = 0;
 };
 
 // Largest separation of b from one of a's faces, and that face.
@@ -68,19 +98,31 @@ double max_separation(const Body& a, const Body& b, int& face) {
   return best;
 }
 
-// Keeps the part of segment (p[0], p[1]) with dot(normal, p) <= offset. Returns the number of points kept.
-int clip(std::array<Vec, 2>& p, Vec normal, double offset) {
+// Keeps the part of segment (p[0], p[1]) with dot(normal, p) <= offset, and which end each point came
+// from. Returns the number of points kept.
+int clip(std::array<Vec, 2>& p, std::array<int, 2>& id, Vec normal, double offset) {
   const double d0 = dot(normal, p[0]) - offset, d1 = dot(normal, p[1]) - offset;
   std::array<Vec, 2> out;
+  std::array<int, 2> out_id{};
   int count = 0;
-  if (d0 <= 0) out[count++] = p[0];
-  if (d1 <= 0) out[count++] = p[1];
-  if (d0 * d1 < 0 && count < 2) out[count++] = p[0] + (d0 / (d0 - d1)) * (p[1] - p[0]);
+  if (d0 <= 0) {
+    out_id[count] = id[0];
+    out[count++] = p[0];
+  }
+  if (d1 <= 0) {
+    out_id[count] = id[1];
+    out[count++] = p[1];
+  }
+  if (d0 * d1 < 0 && count < 2) {
+    out_id[count] = d0 > 0 ? id[0] : id[1];  // the clipped end's place
+    out[count++] = p[0] + (d0 / (d0 - d1)) * (p[1] - p[0]);
+  }
   p = out;
+  id = out_id;
   return count;
 }
 
-// Box2D-style manifold between two boxes: up to two contact points.
+// Box2D-style manifold between two boxes (ia < ib): up to two contact points within `margin`.
 void collide(const std::vector<Body>& bodies, int ia, int ib, double margin, std::vector<Contact>& out) {
   const Body& A = bodies[ia];
   const Body& B = bodies[ib];
@@ -108,165 +150,385 @@ void collide(const std::vector<Body>& bodies, int ia, int ib, double margin, std
     }
   }
   std::array<Vec, 2> seg = {I.vertices[inc_face], I.vertices[(inc_face + 1) % 4]};
+  std::array<int, 2> id = {0, 1};
   const Vec r1 = R.vertices[face], r2 = R.vertices[(face + 1) % 4];
   const Vec t = (1.0 / std::sqrt(dot(r2 - r1, r2 - r1))) * (r2 - r1);
-  if (clip(seg, -1.0 * t, -dot(t, r1)) < 2) return;
-  if (clip(seg, t, dot(t, r2)) < 2) return;
+  if (clip(seg, id, -1.0 * t, -dot(t, r1)) < 2) return;
+  if (clip(seg, id, t, dot(t, r2)) < 2) return;
   const double front = dot(n, r1);
-  for (const Vec& p : seg) {
-    const double s = dot(n, p) - front;
+  const uint64_t pair = (static_cast<uint64_t>(ia) << 40) | (static_cast<uint64_t>(ib) << 16);
+  const uint64_t feature = (ref == ia ? 0x80u : 0u) | static_cast<uint64_t>(face << 4) |
+                           static_cast<uint64_t>(inc_face << 2);
+  for (int k = 0; k < 2; ++k) {
+    const double s = dot(n, seg[k]) - front;
     if (s > margin) continue;
-    Contact k;
-    k.a = ref;
-    k.b = inc;
-    k.n = n;
-    k.ra = p - R.c;
-    k.rb = p - I.c;
-    k.separation = s;
-    out.push_back(k);
+    Contact c;
+    c.a = ref;
+    c.b = inc;
+    c.key = pair | feature | static_cast<uint64_t>(id[k]);
+    c.n = n;
+    c.ra = seg[k] - R.c;
+    c.rb = seg[k] - I.c;
+    c.separation = s;
+    out.push_back(c);
   }
 }
 
 Vec point_velocity(const Body& b, Vec r) { return b.v + cross(b.w, r); }
+
+void check_options(const CollapseInput& input, const CollapseOptions& o) {
+  const double h = input.block_height;
+  if (!(h > 0) || !std::isfinite(h)) throw std::invalid_argument("simulate_collapse: block_height must be positive");
+  if (!std::isfinite(input.table_edge)) throw std::invalid_argument("simulate_collapse: table_edge must be finite");
+  auto positive = [](double v) { return v > 0 && std::isfinite(v); };
+  if (!positive(o.dt) || !positive(o.max_time) || !positive(o.key_frame_interval) || !positive(o.rest_speed) ||
+      !positive(o.rest_slide_speed))
+    throw std::invalid_argument(
+        "simulate_collapse: dt, max_time, key_frame_interval, rest_speed and rest_slide_speed must be positive");
+  if (o.max_time / o.dt > 1e6 || o.max_time / o.key_frame_interval > 1e5)
+    throw std::invalid_argument("simulate_collapse: max_time allows more than 1e6 steps or 1e5 key frames");
+  if (o.max_iterations < 1) throw std::invalid_argument("simulate_collapse: max_iterations must be at least 1");
+  if (!(o.tolerance >= 0) || !(o.rest_time >= 0) || !(o.fall_depth >= 0) || !std::isfinite(o.tolerance) ||
+      !std::isfinite(o.rest_time) || !std::isfinite(o.fall_depth))
+    throw std::invalid_argument("simulate_collapse: tolerance, rest_time and fall_depth must be >= 0 and finite");
+  for (size_t i = 0; i < input.blocks.size(); ++i)
+    if (!std::isfinite(input.blocks[i].x) || input.blocks[i].row < 0)
+      throw std::invalid_argument("simulate_collapse: block " + std::to_string(i) + " has a bad row or x");
+}
+
+// One preview: the bodies, the contacts of the current step and the impulses of the last one.
+class Simulation {
+ public:
+  Simulation(const CollapseInput& input, const CollapseOptions& options)
+      : options_(options), edge_(input.table_edge), n_(static_cast<int>(input.blocks.size())), bodies_(n_ + 1) {
+    const double h = input.block_height;
+    const double inv_inertia = 12.0 / (1.0 + h * h);
+    for (int i = 0; i < n_; ++i) {
+      const auto& in = input.blocks[i];
+      Body& b = bodies_[i];
+      b.c = {in.x + 0.5, (in.row + 0.5) * h};
+      b.hx = 0.5;
+      b.hy = 0.5 * h;
+      b.update_geometry();
+      if (in.moving) wake(b);
+    }
+    inv_inertia_ = inv_inertia;
+    reach_ = std::sqrt(0.25 + 0.25 * h * h);
+    Body& table = bodies_[n_];  // the surface: a big static box x <= edge, y <= 0
+    table.is_table = true;
+    table.hx = table.hy = 1e3;
+    table.c = {edge_ - 1e3, -1e3};
+    table.update_geometry();
+    parent_.resize(n_);
+    island_index_.resize(n_);
+  }
+
+  CollapsePreview run() {
+    const long max_steps = std::lround(std::ceil(options_.max_time / options_.dt - 1e-9));
+    long next_frame = 1;
+    record(0.0);
+    long step = 0;
+    bool ended = finished();
+    while (!ended && step < max_steps) {
+      advance();
+      ++step;
+      const double t = static_cast<double>(step) * options_.dt;
+      if (t >= static_cast<double>(next_frame) * options_.key_frame_interval - 1e-9) {
+        record(t);
+        ++next_frame;
+      }
+      ended = finished();
+    }
+    const double t_end = static_cast<double>(step) * options_.dt;
+    if (out_.times.back() < t_end) record(t_end);
+    out_.came_to_rest = ended;
+    out_.steps = static_cast<int>(step);
+    out_.end.resize(n_);
+    out_.left_pile.resize(n_);
+    for (int i = 0; i < n_; ++i) {
+      const Body& b = bodies_[i];
+      BlockEnd e = BlockEnd::kUntouched;
+      if (b.state == State::kFalling) e = BlockEnd::kFellOff;
+      else if (b.awake()) e = BlockEnd::kMoving;
+      else if (b.slid_away) e = BlockEnd::kSlidAway;
+      else if (b.ever_awake) e = BlockEnd::kAtRest;
+      out_.end[i] = e;
+      out_.left_pile[i] = e == BlockEnd::kSlidAway || e == BlockEnd::kFellOff;
+    }
+    return std::move(out_);
+  }
+
+ private:
+  // Nothing in the pile is awake and the falling blocks are out of the picture.
+  bool finished() const {
+    for (int i = 0; i < n_; ++i) {
+      const Body& b = bodies_[i];
+      if (b.awake() || (b.state == State::kFalling && b.hi_y > -options_.fall_depth)) return false;
+    }
+    return true;
+  }
+
+  void record(double t) {
+    out_.times.push_back(t);
+    std::vector<Pose> frame(n_);
+    for (int i = 0; i < n_; ++i) frame[i] = {bodies_[i].c.x, bodies_[i].c.y, bodies_[i].angle};
+    out_.frames.push_back(std::move(frame));
+  }
+
+  static void wake(Body& b) {
+    b.state = State::kAwake;
+    b.ever_awake = true;
+    b.slid_away = false;
+    b.awake_for = b.still_for = b.flat_for = 0.0;
+  }
+
+  static void put_to_sleep(Body& b, bool slid_away) {
+    b.state = State::kAsleep;
+    b.slid_away = slid_away;
+    b.v = {};
+    b.w = 0.0;
+  }
+
+  double im(const Body& b) const { return b.awake() ? 1.0 : 0.0; }
+  double ii(const Body& b) const { return b.awake() ? inv_inertia_ : 0.0; }
+
+  void advance() {
+    const double dt = options_.dt;
+    awake_.clear();
+    for (int i = 0; i < n_; ++i) {
+      Body& b = bodies_[i];
+      if (b.state == State::kAsleep) {
+        b.expand = 0.5 * kMargin;
+        continue;
+      }
+      b.v.y -= dt;  // gravity
+      if (!b.awake()) continue;
+      b.expand = 0.5 * kMargin + dt * (std::abs(b.v.x) + std::abs(b.v.y) + std::abs(b.w) * reach_);
+      awake_.push_back(i);
+    }
+    find_contacts();
+    wake_struck_sleepers();
+    prepare_contacts();
+    build_islands();
+    solve();
+    integrate();
+    settle_islands();
+  }
+
+  // Pairs with at least one awake body whose grown boxes overlap, and awake bodies near the surface.
+  void find_contacts() {
+    contacts_.clear();
+    for (int a : awake_) {
+      const Body& A = bodies_[a];
+      for (int b = 0; b < n_; ++b) {
+        const Body& B = bodies_[b];
+        if (b == a || !B.in_pile() || (B.awake() && b < a)) continue;
+        const double margin = A.expand + B.expand;
+        if (!boxes_overlap(A, B, margin)) continue;
+        collide(bodies_, std::min(a, b), std::max(a, b), margin, contacts_);
+      }
+      const double margin = A.expand + 0.5 * kMargin;
+      if (A.lo_y - margin <= 0.0 && A.lo_x - margin <= edge_) collide(bodies_, a, n_, margin, contacts_);
+    }
+    // Warm start from last step's impulse on the same feature.
+    for (Contact& c : contacts_) {
+      auto it = std::lower_bound(previous_.begin(), previous_.end(), std::make_pair(c.key, -1e300));
+      if (it != previous_.end() && it->first == c.key) c.impulse = it->second;
+    }
+  }
+
+  // A sleeping block wakes when a moving block strikes it or when it rests on a moving block. Woken before
+  // the solve, so the blow moves it this very step.
+  void wake_struck_sleepers() {
+    for (Contact& c : contacts_) {
+      Body &A = bodies_[c.a], &B = bodies_[c.b];
+      c.approach = dot(point_velocity(B, c.rb) - point_velocity(A, c.ra), c.n);
+      for (int side = 0; side < 2; ++side) {
+        Body& sleeper = side == 0 ? A : B;
+        const Body& other = side == 0 ? B : A;
+        if (sleeper.is_table || sleeper.state != State::kAsleep || !other.awake()) continue;
+        const double up_from_other = side == 1 ? c.n.y : -c.n.y;  // normal from the other body to the sleeper
+        if (c.approach < -kWakeSpeed || up_from_other > 0.5) wake(sleeper);
+      }
+    }
+  }
+
+  void prepare_contacts() {
+    const double dt = options_.dt;
+    for (Contact& c : contacts_) {
+      const Body &A = bodies_[c.a], &B = bodies_[c.b];
+      c.rna = cross(c.ra, c.n);
+      c.rnb = cross(c.rb, c.n);
+      c.ima = im(A);
+      c.iia = ii(A);
+      c.imb = im(B);
+      c.iib = ii(B);
+      const double k = c.ima + c.imb + c.iia * c.rna * c.rna + c.iib * c.rnb * c.rnb;
+      c.mass = k > 0 ? 1.0 / k : 0.0;
+      c.target = c.separation > 0 ? -c.separation / dt : kBaumgarte * std::max(-c.separation - kSlop, 0.0) / dt;
+    }
+  }
+
+  int find(int i) {
+    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
+    return i;
+  }
+
+  // Awake bodies joined by contacts (sleeping ones and the surface do not join islands). Contacts are
+  // grouped by island, islands numbered by their lowest body.
+  void build_islands() {
+    for (int i = 0; i < n_; ++i) parent_[i] = i;
+    for (const Contact& c : contacts_) {
+      if (!bodies_[c.a].awake() || !bodies_[c.b].awake()) continue;
+      const int ra = find(c.a), rb = find(c.b);
+      if (ra != rb) parent_[std::max(ra, rb)] = std::min(ra, rb);
+    }
+    islands_ = 0;
+    for (int i = 0; i < n_; ++i) {
+      if (!bodies_[i].awake()) continue;
+      const int root = find(i);
+      island_index_[i] = root == i ? islands_++ : island_index_[root];
+    }
+    island_start_.assign(islands_ + 1, 0);
+    for (Contact& c : contacts_) {
+      c.island = island_index_[bodies_[c.a].awake() ? c.a : c.b];
+      ++island_start_[c.island + 1];
+    }
+    for (int k = 0; k < islands_; ++k) island_start_[k + 1] += island_start_[k];
+    sorted_.resize(contacts_.size());
+    std::vector<int>& fill = island_fill_;
+    fill.assign(island_start_.begin(), island_start_.end() - 1);
+    for (const Contact& c : contacts_) sorted_[fill[c.island]++] = c;
+    contacts_.swap(sorted_);
+  }
+
+  void apply(Contact& c, double d) {
+    Body &A = bodies_[c.a], &B = bodies_[c.b];
+    const Vec p = d * c.n;
+    A.v = A.v - c.ima * p;
+    A.w -= c.iia * c.rna * d;
+    B.v = B.v + c.imb * p;
+    B.w += c.iib * c.rnb * d;
+  }
+
+  // Projected Gauss-Seidel on the normal impulses, island by island, each until it stops changing.
+  void solve() {
+    for (Contact& c : contacts_)
+      if (c.impulse > 0) apply(c, c.impulse);
+    for (int k = 0; k < islands_; ++k) {
+      const int begin = island_start_[k], end = island_start_[k + 1];
+      for (int it = 0; it < options_.max_iterations; ++it) {
+        double largest = 0.0;
+        for (int j = begin; j < end; ++j) {
+          Contact& c = contacts_[j];
+          if (c.mass == 0.0) continue;
+          const Body &A = bodies_[c.a], &B = bodies_[c.b];
+          const double vn = dot(B.v - A.v, c.n) + B.w * c.rnb - A.w * c.rna;
+          const double next = std::max(c.impulse + (c.target - vn) * c.mass, 0.0);
+          const double d = next - c.impulse;
+          if (d == 0.0) continue;
+          c.impulse = next;
+          apply(c, d);
+          largest = std::max(largest, std::abs(d));
+        }
+        if (largest <= options_.tolerance) break;
+      }
+    }
+    previous_.clear();
+    for (const Contact& c : contacts_) previous_.emplace_back(c.key, c.impulse);
+    std::sort(previous_.begin(), previous_.end());
+  }
+
+  void integrate() {
+    const double dt = options_.dt, rest = options_.rest_speed;
+    for (int i = 0; i < n_; ++i) {
+      Body& b = bodies_[i];
+      if (b.state == State::kAsleep) continue;
+      b.c = b.c + dt * b.v;
+      b.angle += dt * b.w;
+      b.update_geometry();
+      if (!b.awake()) continue;
+      b.awake_for += dt;
+      const bool flat = std::abs(b.v.y) <= rest && std::abs(b.w) * 0.5 <= rest;  // the ends move slower than rest
+      b.flat_for = flat ? b.flat_for + dt : 0.0;
+      b.still_for = flat && std::abs(b.v.x) <= options_.rest_slide_speed ? b.still_for + dt : 0.0;
+      // Past the edge with its highest point below the surface: nothing in the pile can reach it any more.
+      if (b.hi_y < 0.0 && b.lo_x > edge_ - kMargin) b.state = State::kFalling;
+    }
+  }
+
+  // Islands that have been still long enough fall asleep; islands sliding alone on the surface stop.
+  void settle_islands() {
+    std::vector<IslandState>& info = island_states_;
+    info.assign(islands_, IslandState{});
+    const double rest_time = options_.rest_time - 1e-9;
+    for (int i = 0; i < n_; ++i) {
+      const Body& b = bodies_[i];
+      if (!b.awake()) continue;
+      IslandState& s = info[island_index_[i]];
+      const bool settled = b.awake_for >= kMinAwake - 1e-9;
+      s.still = s.still && settled && b.still_for >= rest_time;
+      s.flat = s.flat && settled && b.flat_for >= rest_time;
+      s.over_surface = s.over_surface && b.c.x < edge_;
+    }
+    for (const Contact& c : contacts_) {
+      IslandState& s = info[c.island];
+      const Body &A = bodies_[c.a], &B = bodies_[c.b];
+      if (A.is_table || B.is_table) s.on_surface = true;
+      else if (!A.awake() || !B.awake()) s.touches_pile = true;  // a sleeping block: part of the pile
+    }
+    for (int k = 0; k < islands_; ++k) {
+      const IslandState& s = info[k];
+      if (s.still) {
+        settle(k, false);
+      } else if (s.flat && s.on_surface && !s.touches_pile && s.over_surface && clear_of_others(k)) {
+        settle(k, true);
+      }
+    }
+  }
+
+  bool clear_of_others(int island) const {
+    for (int i = 0; i < n_; ++i) {
+      const Body& b = bodies_[i];
+      if (!b.awake() || island_index_[i] != island) continue;
+      for (int j = 0; j < n_; ++j) {
+        const Body& o = bodies_[j];
+        if (j == i || !o.in_pile() || (o.awake() && island_index_[j] == island)) continue;
+        if (boxes_overlap(b, o, kClearance)) return false;
+      }
+    }
+    return true;
+  }
+
+  void settle(int island, bool slid_away) {
+    for (int i = 0; i < n_; ++i)
+      if (bodies_[i].awake() && island_index_[i] == island) put_to_sleep(bodies_[i], slid_away);
+  }
+
+  CollapseOptions options_;
+  double edge_;
+  int n_;
+  std::vector<Body> bodies_;  // the blocks, then the surface
+  double inv_inertia_ = 0.0, reach_ = 0.0;
+  std::vector<int> awake_;
+  std::vector<Contact> contacts_, sorted_;
+  std::vector<std::pair<uint64_t, double>> previous_;  // last step's impulses by contact key, sorted
+  std::vector<int> parent_, island_index_, island_start_, island_fill_;
+  int islands_ = 0;
+  struct IslandState {
+    bool still = true, flat = true, on_surface = false, touches_pile = false, over_surface = true;
+  };
+  std::vector<IslandState> island_states_;
+  CollapsePreview out_;
+};
 
 }  // namespace
 
 double seconds_per_time_unit(double block_length_m) { return std::sqrt(block_length_m / 9.81); }
 
 CollapsePreview simulate_collapse(const CollapseInput& input, const CollapseOptions& options) {
-  const double h = input.block_height;
-  if (!(h > 0) || !std::isfinite(h)) throw std::invalid_argument("simulate_collapse: block_height must be positive");
-  if (!(options.dt > 0) || !(options.max_time > 0) || !(options.key_frame_interval > 0))
-    throw std::invalid_argument("simulate_collapse: dt, max_time and key_frame_interval must be positive");
-  const int n = static_cast<int>(input.blocks.size());
-  std::vector<Body> bodies(n + 1);
-  const double inertia = (1.0 + h * h) / 12.0;
-  for (int i = 0; i < n; ++i) {
-    const auto& in = input.blocks[i];
-    if (!std::isfinite(in.x) || in.row < 0)
-      throw std::invalid_argument("simulate_collapse: block " + std::to_string(i) + " has a bad row or x");
-    Body& b = bodies[i];
-    b.c = {in.x + 0.5, (in.row + 0.5) * h};
-    b.hx = 0.5;
-    b.hy = 0.5 * h;
-    b.inv_mass = 1.0;
-    b.inv_inertia = 1.0 / inertia;
-    b.awake = in.moving;
-    b.update_geometry();
-  }
-  Body& table = bodies[n];  // the surface: a big static box x <= edge, y <= 0
-  table.is_static = true;
-  table.awake = false;
-  table.hx = table.hy = 50.0;
-  table.c = {input.table_edge - 50.0, -50.0};
-  table.update_geometry();
-
-  const double dt = options.dt;
-  const double margin = 0.02;   // contacts are found this far apart (speculative)
-  const double slop = 0.002;    // penetration tolerated without correction
-  const double baumgarte = 0.2;
-  const double reach = std::sqrt(0.25 + 0.25 * h * h);
-
-  CollapsePreview out;
-  auto record = [&](double t) {
-    out.times.push_back(t);
-    std::vector<Pose> frame(n);
-    for (int i = 0; i < n; ++i) frame[i] = {bodies[i].c.x, bodies[i].c.y, bodies[i].angle};
-    out.frames.push_back(std::move(frame));
-  };
-  record(0.0);
-
-  std::vector<Contact> contacts;
-  double t = 0.0, next_frame = options.key_frame_interval, quiet_time = 0.0;
-  const double rest_time = 0.3;
-  while (t < options.max_time - 1e-12) {
-    // Gravity on awake bodies.
-    for (int i = 0; i < n; ++i)
-      if (bodies[i].awake) bodies[i].v.y -= dt;
-
-    // Contacts among bodies still in the pile (at least one of the pair awake).
-    contacts.clear();
-    for (int i = 0; i < n; ++i) {
-      const Body& bi = bodies[i];
-      if (bi.left) continue;
-      for (int j = i + 1; j < n; ++j) {
-        const Body& bj = bodies[j];
-        if (bj.left || (!bi.awake && !bj.awake)) continue;
-        if (std::abs(bi.c.x - bj.c.x) > 2 * reach + margin || std::abs(bi.c.y - bj.c.y) > 2 * reach + margin) continue;
-        collide(bodies, i, j, margin, contacts);
-      }
-      if (bi.awake && bi.c.x - reach - margin <= input.table_edge && bi.c.y - reach - margin <= 0.0)
-        collide(bodies, n, i, margin, contacts);
-    }
-    for (Contact& k : contacts) {
-      const Body &A = bodies[k.a], &B = bodies[k.b];
-      const double rna = cross(k.ra, k.n), rnb = cross(k.rb, k.n);
-      const double kk = A.im() + B.im() + A.ii() * rna * rna + B.ii() * rnb * rnb;
-      k.mass = kk > 0 ? 1.0 / kk : 0.0;
-      k.approach = dot(point_velocity(B, k.rb) - point_velocity(A, k.ra), k.n);
-      k.target = k.separation > 0 ? -k.separation / dt : baumgarte * std::max(-k.separation - slop, 0.0) / dt;
-    }
-    // Projected Gauss-Seidel on the normal impulses.
-    for (int it = 0; it < options.iterations; ++it) {
-      for (Contact& k : contacts) {
-        if (k.mass == 0.0) continue;
-        Body &A = bodies[k.a], &B = bodies[k.b];
-        const double vn = dot(point_velocity(B, k.rb) - point_velocity(A, k.ra), k.n);
-        const double next = std::max(k.impulse + (k.target - vn) * k.mass, 0.0);
-        const double d = next - k.impulse;
-        k.impulse = next;
-        const Vec p = d * k.n;
-        A.v = A.v - A.im() * p;
-        A.w -= A.ii() * cross(k.ra, p);
-        B.v = B.v + B.im() * p;
-        B.w += B.ii() * cross(k.rb, p);
-      }
-    }
-    // Wake sleeping blocks struck hard, or whose support below is moving.
-    bool woke = false;
-    for (const Contact& k : contacts) {
-      const int pair[2] = {k.a, k.b};
-      for (int s = 0; s < 2; ++s) {
-        Body& sleeper = bodies[pair[s]];
-        const Body& other = bodies[pair[1 - s]];
-        if (sleeper.is_static || sleeper.awake || !other.awake) continue;
-        const double up_from_other = s == 1 ? k.n.y : -k.n.y;  // normal component pointing from other to sleeper
-        if (k.approach < -0.3 || up_from_other > 0.5) {
-          sleeper.awake = true;
-          woke = true;
-        }
-      }
-    }
-    // Integrate positions (semi-implicit Euler).
-    bool all_quiet = true, any_in_pile = false;
-    for (int i = 0; i < n; ++i) {
-      Body& b = bodies[i];
-      if (!b.awake) continue;
-      b.c = b.c + dt * b.v;
-      b.angle += dt * b.w;
-      b.update_geometry();
-      if (!b.left && b.c.y < -options.left_depth && b.c.x > input.table_edge) b.left = true;
-      if (!b.left) {
-        any_in_pile = true;
-        if (std::abs(b.v.x) + std::abs(b.v.y) > 0.01 || std::abs(b.w) > 0.02) all_quiet = false;
-      }
-    }
-    t += dt;
-    ++out.steps;
-    if (t >= next_frame - 1e-9) {
-      record(t);
-      next_frame += options.key_frame_interval;
-    }
-    quiet_time = (all_quiet && !woke) ? quiet_time + dt : 0.0;
-    if (!any_in_pile || quiet_time >= rest_time) {
-      out.came_to_rest = true;  // nothing left in the pile is moving
-      break;
-    }
-  }
-  if (out.times.back() < t - 1e-9) record(t);
-  out.left_pile.resize(n);
-  for (int i = 0; i < n; ++i) out.left_pile[i] = bodies[i].left;
-  return out;
+  check_options(input, options);
+  return Simulation(input, options).run();
 }
 
 }  // namespace bricklayer::planner

@@ -1,15 +1,23 @@
 // Collapse preview: how the pile will fall, in the frictionless model of shared DESIGN.md "The physics".
 //
 // Rigid 2D blocks (length 1, height h, unit mass, I = (1 + h^2)/12, g = 1 in block lengths and the time unit
-// sqrt(block length / g)). Semi-implicit Euler with small steps; each step finds the current contacts
-// (box-box manifolds, Box2D style: reference face of least penetration, incident edge clipped to it, so a
-// block on a block touches at the two ends of the contact interval; the surface is a static box x <= edge,
-// y <= 0) and solves the frictionless velocity problem (normal impulses >= 0, non-penetration with a small
-// Baumgarte bias) by projected Gauss-Seidel. Blocks the prediction calls stable start asleep (static) and
-// wake when something they rest on moves or when a moving block strikes them, so the balanced part stays
-// exactly where it is unless debris hits it. A block whose centre falls below the surface level beyond the
-// edge has left the pile: it keeps falling freely without contacts. The simulation stops when every awake
-// block has left or is at rest, or at max_time.
+// sqrt(block length / g)). Semi-implicit Euler; each step finds the current contacts (box-box manifolds,
+// Box2D style: reference face of least penetration, incident edge clipped to it, so a block on a block
+// touches at the two ends of the contact interval; the surface is a static box x <= edge, y <= 0) and solves
+// the frictionless velocity problem (normal impulses >= 0, non-penetration with a small Baumgarte bias) by
+// projected Gauss-Seidel, warm-started from the previous step's impulses.
+//
+// Blocks the prediction calls stable start asleep (static) and wake when something they rest on moves or
+// when a moving block strikes them, so the balanced part stays exactly where it is unless debris hits it.
+// Awake blocks that touch one another form islands; an island whose blocks have all been still for
+// `rest_time` falls asleep (at rest). A block leaves the pile, and stops costing contact work, in two ways:
+//   - it falls past the surface edge (its highest point below the surface): from then on it falls freely;
+//   - it slides alone on the surface (touching no block, lying flat, clear of every other block): it stops
+//     where it is. The frictionless model would let it slide forever; a real table's friction stops it.
+//     It stays an obstacle (asleep), so debris still lands on it and wakes it.
+// The simulation ends when no block in the pile is awake (every block at rest or gone) and the blocks that
+// fell have dropped `fall_depth` below the surface (for the animation), or at max_time.
+// Deterministic: the same input and options give bit-identical output.
 #pragma once
 
 #include <cstdint>
@@ -38,21 +46,39 @@ struct CollapseOptions {
   double dt = 0.01;                  // time step, time units
   double max_time = 8.0;             // time units
   double key_frame_interval = 0.2;   // time units between key frames (the first is t = 0)
-  int iterations = 12;               // Gauss-Seidel sweeps per step
-  double left_depth = 0.5;           // a block has left the pile when its centre is this far below the surface
+  int max_iterations = 12;           // Gauss-Seidel sweeps per step at most
+  double tolerance = 1e-5;           // sweeps stop early when no impulse changes by more than this
+  double rest_speed = 0.01;          // block lengths per time unit: a block whose ends move slower is still
+  // Sideways drift that still counts as rest. Frictionless, a block that came down flat keeps the small sideways
+  // speed the contacts gave it for ever; real blocks have friction. 0.05 block lengths per time unit = 4.3 cm/s.
+  double rest_slide_speed = 0.05;
+  double rest_time = 0.3;            // time units an island must stay still to fall asleep
+  double fall_depth = 1.0;           // block lengths below the surface a falling block is followed
+};
+
+// How each block ends.
+enum class BlockEnd : int8_t {
+  kUntouched = 0,  // asleep from start to end: not a hair moved
+  kAtRest = 1,     // moved, then came to rest in the pile (on blocks or against them)
+  kSlidAway = 2,   // left the pile alone on the surface; stopped there (see the file comment)
+  kFellOff = 3,    // left the pile past the surface edge
+  kMoving = 4,     // still moving at max_time
 };
 
 struct CollapsePreview {
-  std::vector<double> times;                // time units, one per key frame
+  std::vector<double> times;                // time units, one per key frame; the last is the end
   std::vector<std::vector<Pose>> frames;    // frames[k][i]: pose of block i at times[k]
-  std::vector<bool> left_pile;              // per block, at the end
-  bool came_to_rest = false;                // every block still in the pile is at rest at the end (false: max_time)
+  std::vector<BlockEnd> end;                // per block
+  std::vector<bool> left_pile;              // per block: kSlidAway or kFellOff
+  bool came_to_rest = false;                // ended before max_time: every block at rest or gone
   int steps = 0;
 };
 
 // Seconds per time unit for real blocks (7.5 cm long, g = 9.81 m/s^2).
 double seconds_per_time_unit(double block_length_m = 0.075);
 
+// Throws std::invalid_argument for a non-positive or non-finite block height, option or time, a negative
+// row or a non-finite x.
 CollapsePreview simulate_collapse(const CollapseInput& input, const CollapseOptions& options = {});
 
 }  // namespace bricklayer::planner
