@@ -18,11 +18,13 @@ using namespace bricklayer;
 
 int Main(int argc, char** argv) {
   Flags flags("bricklayer-overhang-table",
-              "Searches the largest overhang of n = 1..--max-n blocks (SLSQP over block positions and contact\n"
-              "forces, beam search over layouts) and writes the table and the stacks as JSON.");
+              "Searches the largest overhang of n = 1..--max-n blocks (sequential linear programming over block\n"
+              "positions and contact forces, beam search over layouts) and writes the table and the stacks as JSON.");
   flags.add("max-n", "30", "largest number of blocks");
   flags.add("beam", "8", "layouts kept per n");
   flags.add("perturbations", "4", "seeded restarts around the best layouts per n");
+  flags.add("wall-seeds", "6", "seeded brick-wall start layouts per n (n >= 8)");
+  flags.add("moves", "0", "local improvement: one-block moves re-optimised per n (0 = off)");
   flags.add("seed", "1", "random seed of the restarts");
   flags.add("table", "best_overhang.json", "output: {\"n\": overhang} in block lengths");
   flags.add("stacks", "best_overhang_stacks.json", "output: the stacks ({\"n\": [{\"row\", \"x\"}...]})");
@@ -37,8 +39,11 @@ int Main(int argc, char** argv) {
   planner::OverhangSearchOptions options;
   options.beam = static_cast<int>(flags.get_int("beam"));
   options.perturbations = static_cast<int>(flags.get_int("perturbations"));
+  options.wall_seeds = static_cast<int>(flags.get_int("wall-seeds"));
+  options.moves = static_cast<int>(flags.get_int("moves"));
   options.seed = static_cast<uint64_t>(flags.get_int("seed"));
-  if (options.beam < 1 || options.perturbations < 0) throw FlagError("--beam must be >= 1, --perturbations >= 0");
+  if (options.beam < 1 || options.perturbations < 0 || options.wall_seeds < 0 || options.moves < 0)
+    throw FlagError("--beam must be >= 1; --perturbations, --wall-seeds and --moves >= 0");
   options.tolerance = flags.get_double("tolerance");
   if (!(options.tolerance > 0 && options.tolerance < 1e-3)) throw FlagError("--tolerance must be in (0, 1e-3)");
   if (!flags.get("resume").empty()) {

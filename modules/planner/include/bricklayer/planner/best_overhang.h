@@ -5,10 +5,10 @@
 // m = f * p about x = 0; the point of application p must lie in the contact interval [max left ends,
 // min right ends], i.e. f*lo <= m <= f*hi. That is exactly "nonnegative forces at the two ends of the
 // interval" and forces f = 0 on pairs that do not overlap. Equilibrium of every block is linear in (x, f, m);
-// the interval constraints are bilinear. SLSQP (NLopt) maximises the target block's right end; NLopt reports
-// success on infeasible results, so every result's constraint residual is checked here.
+// the interval constraints are bilinear. A sequential-linear-programming trust-region method (CLP for the
+// linear programs) maximises the target block's right end; every answer's constraint residual is measured.
 // The search grows layouts block by block (beam search over where the next block goes) with seeded
-// perturbations: deterministic for a given seed.
+// perturbations, brick-wall starts and optional one-block moves: deterministic for a given seed.
 #pragma once
 
 #include <cstdint>
@@ -31,11 +31,11 @@ struct OverhangStack {
 };
 
 // Optimises the positions of a layout (rows fixed, x the start) for the largest overhang of block target.
-// Returns nothing when SLSQP ends infeasible (residual above tolerance). feasibility_phase: when the
-// maximisation ends infeasible, find the balanced layout closest to the start and maximise again from there
-// (doubles the cost of failures; worth it for starts far from balanced).
+// Returns nothing when the optimiser ends infeasible (residual above tolerance), which is common for starts
+// far from balanced. Throws std::invalid_argument on a target out of range, a negative row, a non-finite x or
+// a row with no row below it.
 std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& start, int target,
-                                             double tolerance = 1e-9, bool feasibility_phase = false);
+                                             double tolerance = 1e-9);
 
 // Seeded brick-wall start layouts of n blocks with random row profiles (used by the search for n >= 8).
 std::vector<std::vector<PlacedBlock>> wall_layouts(int n, int count, uint64_t seed);
@@ -44,6 +44,7 @@ struct OverhangSearchOptions {
   int beam = 6;           // layouts kept per n
   int perturbations = 4;  // seeded random restarts around the best layouts per n
   int wall_seeds = 6;     // seeded brick-wall layouts with random row profiles per n (n >= 8)
+  int moves = 0;           // local improvement: re-optimisations of one-block moves tried per n (n >= 4)
   uint64_t seed = 1;
   double tolerance = 1e-9;  // largest accepted constraint residual
   // Results already known for n = 1..k (e.g. from an earlier run's stacks file): the search continues at
