@@ -26,8 +26,9 @@ inline constexpr double kMaxSnapOverlap = 0.1;
 // Sets left_px and the camera-pixel corners of a block from its row and x.
 void place_block(DetectedBlock& block, const BoardFrame& frame);
 
-// Applies the rules to `blocks` in place (order: bottom row first, left to right). `image_size` is the
-// camera frame's size. Blocks that move get their pixel geometry recomputed through `frame`.
+// Applies the rules to `blocks` in place, keeping the input's order (moving never reorders a row) and
+// returning what changed (PublishCounts, detector.h). `image_size` is the camera frame's size. Blocks that
+// move get their pixel geometry recomputed through `frame`.
 PublishCounts make_publishable(std::vector<DetectedBlock*>& blocks, const BoardFrame& frame, cv::Size image_size,
                                double max_snap_overlap = kMaxSnapOverlap);
 
