@@ -275,14 +275,16 @@ class Simulation {
     out_.frames.push_back(std::move(frame));
   }
 
-  static void wake(Body& b) {
+  void wake(Body& b) {
+    sleepers_changed_ = true;
     b.state = State::kAwake;
     b.ever_awake = true;
     b.slid_away = false;
     b.awake_for = b.still_for = b.flat_for = 0.0;
   }
 
-  static void put_to_sleep(Body& b, bool slid_away) {
+  void put_to_sleep(Body& b, bool slid_away) {
+    sleepers_changed_ = true;
     b.state = State::kAsleep;
     b.slid_away = slid_away;
     b.v = {};
@@ -315,20 +317,56 @@ class Simulation {
     settle_islands();
   }
 
-  // Pairs with at least one awake body whose grown boxes overlap, and awake bodies near the surface.
+  // Broad phase: sleeping blocks sorted by the bottom of their boxes, rebuilt only when one falls asleep or
+  // wakes; awake blocks swept against each other the same way every step. Only pairs with an awake block and
+  // boxes within the pair's margin reach the narrow phase.
+  void sort_sleepers() {
+    sleepers_.clear();
+    sleeper_extent_ = 0.0;
+    for (int i = 0; i < n_; ++i) {
+      const Body& b = bodies_[i];
+      if (b.state != State::kAsleep) continue;
+      sleepers_.push_back(i);
+      sleeper_extent_ = std::max(sleeper_extent_, b.hi_y - b.lo_y);
+    }
+    std::sort(sleepers_.begin(), sleepers_.end(), [&](int a, int b) {
+      return bodies_[a].lo_y < bodies_[b].lo_y || (bodies_[a].lo_y == bodies_[b].lo_y && a < b);
+    });
+    sleeper_lo_y_.resize(sleepers_.size());
+    for (size_t k = 0; k < sleepers_.size(); ++k) sleeper_lo_y_[k] = bodies_[sleepers_[k]].lo_y;
+    sleepers_changed_ = false;
+  }
+
   void find_contacts() {
     contacts_.clear();
+    if (sleepers_changed_) sort_sleepers();
+    const double sleeper_expand = 0.5 * kMargin;
     for (int a : awake_) {
       const Body& A = bodies_[a];
-      for (int b = 0; b < n_; ++b) {
-        const Body& B = bodies_[b];
-        if (b == a || !B.in_pile() || (B.awake() && b < a)) continue;
-        const double margin = A.expand + B.expand;
-        if (!boxes_overlap(A, B, margin)) continue;
-        collide(bodies_, std::min(a, b), std::max(a, b), margin, contacts_);
+      const double reach = A.expand + sleeper_expand;
+      const auto first = std::lower_bound(sleeper_lo_y_.begin(), sleeper_lo_y_.end(), A.lo_y - reach - sleeper_extent_);
+      for (auto k = static_cast<size_t>(first - sleeper_lo_y_.begin()); k < sleepers_.size(); ++k) {
+        if (sleeper_lo_y_[k] > A.hi_y + reach) break;
+        const int b = sleepers_[k];
+        if (boxes_overlap(A, bodies_[b], reach)) collide(bodies_, std::min(a, b), std::max(a, b), reach, contacts_);
       }
-      const double margin = A.expand + 0.5 * kMargin;
-      if (A.lo_y - margin <= 0.0 && A.lo_x - margin <= edge_) collide(bodies_, a, n_, margin, contacts_);
+      if (A.lo_y - reach <= 0.0 && A.lo_x - reach <= edge_) collide(bodies_, a, n_, reach, contacts_);
+    }
+    by_height_ = awake_;
+    std::sort(by_height_.begin(), by_height_.end(), [&](int a, int b) {
+      const double la = bodies_[a].lo_y - bodies_[a].expand, lb = bodies_[b].lo_y - bodies_[b].expand;
+      return la < lb || (la == lb && a < b);
+    });
+    for (size_t i = 0; i < by_height_.size(); ++i) {
+      const int a = by_height_[i];
+      const Body& A = bodies_[a];
+      for (size_t j = i + 1; j < by_height_.size(); ++j) {
+        const int b = by_height_[j];
+        const Body& B = bodies_[b];
+        if (B.lo_y - B.expand > A.hi_y + A.expand) break;
+        const double margin = A.expand + B.expand;
+        if (boxes_overlap(A, B, margin)) collide(bodies_, std::min(a, b), std::max(a, b), margin, contacts_);
+      }
     }
     // Warm start from last step's impulse on the same feature.
     for (Contact& c : contacts_) {
@@ -344,11 +382,18 @@ class Simulation {
       Body &A = bodies_[c.a], &B = bodies_[c.b];
       c.approach = dot(point_velocity(B, c.rb) - point_velocity(A, c.ra), c.n);
       for (int side = 0; side < 2; ++side) {
-        Body& sleeper = side == 0 ? A : B;
+        const int sleeper_index = side == 0 ? c.a : c.b;
+        Body& sleeper = bodies_[sleeper_index];
         const Body& other = side == 0 ? B : A;
         if (sleeper.is_table || sleeper.state != State::kAsleep || !other.awake()) continue;
+        // Speculative contacts are found up to a step's travel apart: a block flying past must not wake one.
+        const bool strikes = c.approach < -kWakeSpeed && c.separation + c.approach * options_.dt <= 0.0;
         const double up_from_other = side == 1 ? c.n.y : -c.n.y;  // normal from the other body to the sleeper
-        if (c.approach < -kWakeSpeed || up_from_other > 0.5) wake(sleeper);
+        const bool rests_on_it = up_from_other > 0.5 && c.separation <= 0.5 * kMargin;
+        if (strikes || rests_on_it) {
+          wake(sleeper);
+          awake_.push_back(sleeper_index);
+        }
       }
     }
   }
@@ -402,17 +447,26 @@ class Simulation {
     contacts_.swap(sorted_);
   }
 
-  void apply(Contact& c, double d) {
-    Body &A = bodies_[c.a], &B = bodies_[c.b];
-    const Vec p = d * c.n;
-    A.v = A.v - c.ima * p;
+  struct Velocity {
+    double x = 0.0, y = 0.0, w = 0.0;
+  };
+
+  void apply(const Contact& c, double d) {
+    Velocity &A = vel_[c.a], &B = vel_[c.b];
+    const double px = d * c.n.x, py = d * c.n.y;
+    A.x -= c.ima * px;
+    A.y -= c.ima * py;
     A.w -= c.iia * c.rna * d;
-    B.v = B.v + c.imb * p;
+    B.x += c.imb * px;
+    B.y += c.imb * py;
     B.w += c.iib * c.rnb * d;
   }
 
-  // Projected Gauss-Seidel on the normal impulses, island by island, each until it stops changing.
+  // Projected Gauss-Seidel on the normal impulses, island by island, each until it stops changing. Works on a
+  // compact copy of the velocities (sleeping blocks and the surface stay at zero).
   void solve() {
+    vel_.assign(n_ + 1, Velocity{});
+    for (int i : awake_) vel_[i] = {bodies_[i].v.x, bodies_[i].v.y, bodies_[i].w};
     for (Contact& c : contacts_)
       if (c.impulse > 0) apply(c, c.impulse);
     for (int k = 0; k < islands_; ++k) {
@@ -422,8 +476,8 @@ class Simulation {
         for (int j = begin; j < end; ++j) {
           Contact& c = contacts_[j];
           if (c.mass == 0.0) continue;
-          const Body &A = bodies_[c.a], &B = bodies_[c.b];
-          const double vn = dot(B.v - A.v, c.n) + B.w * c.rnb - A.w * c.rna;
+          const Velocity &A = vel_[c.a], &B = vel_[c.b];
+          const double vn = (B.x - A.x) * c.n.x + (B.y - A.y) * c.n.y + B.w * c.rnb - A.w * c.rna;
           const double next = std::max(c.impulse + (c.target - vn) * c.mass, 0.0);
           const double d = next - c.impulse;
           if (d == 0.0) continue;
@@ -433,6 +487,12 @@ class Simulation {
         }
         if (largest <= options_.tolerance) break;
       }
+    }
+    for (int i : awake_) {
+      Body& b = bodies_[i];
+      if (!b.awake()) continue;
+      b.v = {vel_[i].x, vel_[i].y};
+      b.w = vel_[i].w;
     }
     previous_.clear();
     for (const Contact& c : contacts_) previous_.emplace_back(c.key, c.impulse);
@@ -510,8 +570,13 @@ class Simulation {
   int n_;
   std::vector<Body> bodies_;  // the blocks, then the surface
   double inv_inertia_ = 0.0, reach_ = 0.0;
-  std::vector<int> awake_;
+  std::vector<int> awake_, by_height_;
+  std::vector<int> sleepers_;         // sleeping blocks by the bottom of their boxes
+  std::vector<double> sleeper_lo_y_;  // those bottoms
+  double sleeper_extent_ = 0.0;       // the tallest sleeping block's box
+  bool sleepers_changed_ = true;
   std::vector<Contact> contacts_, sorted_;
+  std::vector<Velocity> vel_;
   std::vector<std::pair<uint64_t, double>> previous_;  // last step's impulses by contact key, sorted
   std::vector<int> parent_, island_index_, island_start_, island_fill_;
   int islands_ = 0;

@@ -46,8 +46,8 @@ struct CollapseOptions {
   double dt = 0.01;                  // time step, time units
   double max_time = 8.0;             // time units
   double key_frame_interval = 0.2;   // time units between key frames (the first is t = 0)
-  int max_iterations = 12;           // Gauss-Seidel sweeps per step at most
-  double tolerance = 1e-5;           // sweeps stop early when no impulse changes by more than this
+  int max_iterations = 8;            // Gauss-Seidel sweeps per island and step at most
+  double tolerance = 1e-4;           // sweeps stop early when no impulse changes by more than this (gravity gives 1 per time unit)
   double rest_speed = 0.01;          // block lengths per time unit: a block whose ends move slower is still
   // Sideways drift that still counts as rest. Frictionless, a block that came down flat keeps the small sideways
   // speed the contacts gave it for ever; real blocks have friction. 0.05 block lengths per time unit = 4.3 cm/s.
