@@ -103,10 +103,12 @@ std::vector<Hostile> hostile_predictions() {
   p.balanced = true;
   p.num_blocks = 2;
   p.blocks.resize(2);
-  // num_blocks offset: utime, frame (16) + status (1) + error string (4+1) + balanced (1) + overhang (8)
-  // + score (4) + annotator (4+6) + solver (4+4) = 53.
+  // num_blocks is the last field before the blocks (each id 8 + state 1 + accel 8 + alpha 8 = 25 bytes):
+  // its offset after the 8-byte fingerprint follows from the encoded size, whatever fields precede it.
+  const std::vector<uint8_t> encoded = test::encode_bytes(p);
+  const size_t num_blocks_offset = encoded.size() - 8 - 2 * 25 - 4;
   out.push_back({"prediction num_blocks 2^31-1 with 2 blocks", ch,
-                 patch_i32(test::encode_bytes(p), 53, std::numeric_limits<int32_t>::max())});
+                 patch_i32(encoded, num_blocks_offset, std::numeric_limits<int32_t>::max())});
   auto nan = p;
   nan.frame_number = 912;
   nan.overhang = kNaN;
