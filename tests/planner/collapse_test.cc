@@ -69,7 +69,7 @@ TEST_CASE("a toppling tower falls below its starting height and the balanced par
   // Ended because everything had left, long before max_time.
   CHECK(p.came_to_rest);
   CHECK(p.times.back() < 0.6 * options.max_time);
-  CHECK(p.steps == std::lround(p.times.back() / options.dt));
+  CHECK(p.steps <= std::lround(p.times.back() / options.dt));  // some steps are double steps
 }
 
 TEST_CASE("a block hanging past its balance point tips over the edge and leaves the pile") {

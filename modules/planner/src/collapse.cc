@@ -28,7 +28,9 @@ constexpr double kWakeSpeed = 0.3;   // approach speed at which a moving block w
 // A block that started moving (or was woken) is not put to sleep before this long: near the balance limit a
 // block tips with an angular acceleration of a few hundredths, slow enough to pass for still at first.
 constexpr double kMinAwake = 1.0;
-constexpr double kClearance = 0.1;   // a block sliding alone on the surface is this far from every other block
+constexpr double kClearance = 0.1;
+// Steps are doubled while no awake block moves faster than this (block lengths per time unit, at its ends).
+constexpr double kCalmSpeed = 0.5;   // a block sliding alone on the surface is this far from every other block
 
 enum class State : uint8_t { kAsleep, kAwake, kFalling };
 
@@ -220,29 +222,34 @@ class Simulation {
     table.c = {edge_ - 1e3, -1e3};
     table.update_geometry();
     parent_.resize(n_);
+    woken_.assign(n_, 0);
     island_index_.resize(n_);
   }
 
   CollapsePreview run() {
-    const long max_steps = std::lround(std::ceil(options_.max_time / options_.dt - 1e-9));
+    const long max_ticks = std::lround(std::ceil(options_.max_time / options_.dt - 1e-9));
     long next_frame = 1;
     record(0.0);
-    long step = 0;
+    long tick = 0;  // time in units of options.dt
     bool ended = finished();
-    while (!ended && step < max_steps) {
+    while (!ended && tick < max_ticks) {
+      // Double steps while everything awake is slow (a toppling column, debris settling); single steps for
+      // impacts and fast falls. Double steps start on even ticks so key frames fall on step boundaries.
+      const long ticks = tick % 2 == 0 && tick + 2 <= max_ticks && calm() ? 2 : 1;
+      dt_ = static_cast<double>(ticks) * options_.dt;
       advance();
-      ++step;
-      const double t = static_cast<double>(step) * options_.dt;
+      ++out_.steps;
+      tick += ticks;
+      const double t = static_cast<double>(tick) * options_.dt;
       if (t >= static_cast<double>(next_frame) * options_.key_frame_interval - 1e-9) {
         record(t);
-        ++next_frame;
+        while (static_cast<double>(next_frame) * options_.key_frame_interval <= t + 1e-9) ++next_frame;
       }
       ended = finished();
     }
-    const double t_end = static_cast<double>(step) * options_.dt;
+    const double t_end = static_cast<double>(tick) * options_.dt;
     if (out_.times.back() < t_end) record(t_end);
     out_.came_to_rest = ended;
-    out_.steps = static_cast<int>(step);
     out_.end.resize(n_);
     out_.left_pile.resize(n_);
     for (int i = 0; i < n_; ++i) {
@@ -294,8 +301,17 @@ class Simulation {
   double im(const Body& b) const { return b.awake() ? 1.0 : 0.0; }
   double ii(const Body& b) const { return b.awake() ? inv_inertia_ : 0.0; }
 
+  // No awake block moves faster than kCalmSpeed anywhere on it.
+  bool calm() const {
+    for (int i = 0; i < n_; ++i) {
+      const Body& b = bodies_[i];
+      if (b.awake() && std::abs(b.v.x) + std::abs(b.v.y) + std::abs(b.w) * reach_ > kCalmSpeed) return false;
+    }
+    return true;
+  }
+
   void advance() {
-    const double dt = options_.dt;
+    const double dt = dt_;
     awake_.clear();
     for (int i = 0; i < n_; ++i) {
       Body& b = bodies_[i];
@@ -337,21 +353,27 @@ class Simulation {
     sleepers_changed_ = false;
   }
 
+  // Contacts of awake block `a` with sleeping blocks and the surface. `also_woken`: also with blocks woken in
+  // this step after `a` (they were asleep when the pairs were found).
+  void add_sleeper_contacts(int a, bool also_woken) {
+    const Body& A = bodies_[a];
+    const double reach = A.expand + 0.5 * kMargin;
+    const auto first = std::lower_bound(sleeper_lo_y_.begin(), sleeper_lo_y_.end(), A.lo_y - reach - sleeper_extent_);
+    for (auto k = static_cast<size_t>(first - sleeper_lo_y_.begin()); k < sleepers_.size(); ++k) {
+      if (sleeper_lo_y_[k] > A.hi_y + reach) break;
+      const int b = sleepers_[k];
+      const Body& B = bodies_[b];
+      const bool pair_missing = B.state == State::kAsleep || (also_woken && B.awake() && woken_[b] && b > a);
+      if (b != a && pair_missing && boxes_overlap(A, B, reach))
+        collide(bodies_, std::min(a, b), std::max(a, b), reach, contacts_);
+    }
+    if (A.lo_y - reach <= 0.0 && A.lo_x - reach <= edge_) collide(bodies_, a, n_, reach, contacts_);
+  }
+
   void find_contacts() {
     contacts_.clear();
     if (sleepers_changed_) sort_sleepers();
-    const double sleeper_expand = 0.5 * kMargin;
-    for (int a : awake_) {
-      const Body& A = bodies_[a];
-      const double reach = A.expand + sleeper_expand;
-      const auto first = std::lower_bound(sleeper_lo_y_.begin(), sleeper_lo_y_.end(), A.lo_y - reach - sleeper_extent_);
-      for (auto k = static_cast<size_t>(first - sleeper_lo_y_.begin()); k < sleepers_.size(); ++k) {
-        if (sleeper_lo_y_[k] > A.hi_y + reach) break;
-        const int b = sleepers_[k];
-        if (boxes_overlap(A, bodies_[b], reach)) collide(bodies_, std::min(a, b), std::max(a, b), reach, contacts_);
-      }
-      if (A.lo_y - reach <= 0.0 && A.lo_x - reach <= edge_) collide(bodies_, a, n_, reach, contacts_);
-    }
+    for (int a : awake_) add_sleeper_contacts(a, false);
     by_height_ = awake_;
     std::sort(by_height_.begin(), by_height_.end(), [&](int a, int b) {
       const double la = bodies_[a].lo_y - bodies_[a].expand, lb = bodies_[b].lo_y - bodies_[b].expand;
@@ -368,18 +390,18 @@ class Simulation {
         if (boxes_overlap(A, B, margin)) collide(bodies_, std::min(a, b), std::max(a, b), margin, contacts_);
       }
     }
-    // Warm start from last step's impulse on the same feature.
-    for (Contact& c : contacts_) {
-      auto it = std::lower_bound(previous_.begin(), previous_.end(), std::make_pair(c.key, -1e300));
-      if (it != previous_.end() && it->first == c.key) c.impulse = it->second;
-    }
   }
 
   // A sleeping block wakes when a moving block strikes it or when it rests on a moving block. Woken before
-  // the solve, so the blow moves it this very step.
+  // the solve, so the blow moves it this very step; and with its own contacts (below all, with the blocks it
+  // rests on), or a blow would drive it into the block under it and wake the next one, down a whole tower.
+  // Those new contacts wake nobody in this step: waking spreads one block per step.
   void wake_struck_sleepers() {
-    for (Contact& c : contacts_) {
-      Body &A = bodies_[c.a], &B = bodies_[c.b];
+    const size_t found = contacts_.size();
+    woken_list_.clear();
+    for (size_t j = 0; j < found; ++j) {
+      Contact& c = contacts_[j];
+      const Body &A = bodies_[c.a], &B = bodies_[c.b];
       c.approach = dot(point_velocity(B, c.rb) - point_velocity(A, c.ra), c.n);
       for (int side = 0; side < 2; ++side) {
         const int sleeper_index = side == 0 ? c.a : c.b;
@@ -387,19 +409,30 @@ class Simulation {
         const Body& other = side == 0 ? B : A;
         if (sleeper.is_table || sleeper.state != State::kAsleep || !other.awake()) continue;
         // Speculative contacts are found up to a step's travel apart: a block flying past must not wake one.
-        const bool strikes = c.approach < -kWakeSpeed && c.separation + c.approach * options_.dt <= 0.0;
+        const bool strikes = c.approach < -kWakeSpeed && c.separation + c.approach * dt_ <= 0.0;
         const double up_from_other = side == 1 ? c.n.y : -c.n.y;  // normal from the other body to the sleeper
         const bool rests_on_it = up_from_other > 0.5 && c.separation <= 0.5 * kMargin;
         if (strikes || rests_on_it) {
           wake(sleeper);
-          awake_.push_back(sleeper_index);
+          woken_[sleeper_index] = 1;
+          woken_list_.push_back(sleeper_index);
         }
       }
+    }
+    for (int w : woken_list_) add_sleeper_contacts(w, true);
+    for (int w : woken_list_) {
+      awake_.push_back(w);
+      woken_[w] = 0;
+    }
+    // Warm start from last step's impulse on the same feature.
+    for (Contact& c : contacts_) {
+      auto it = std::lower_bound(previous_.begin(), previous_.end(), std::make_pair(c.key, -1e300));
+      if (it != previous_.end() && it->first == c.key) c.impulse = it->second * (dt_ / previous_dt_);
     }
   }
 
   void prepare_contacts() {
-    const double dt = options_.dt;
+    const double dt = dt_;
     for (Contact& c : contacts_) {
       const Body &A = bodies_[c.a], &B = bodies_[c.b];
       c.rna = cross(c.ra, c.n);
@@ -495,12 +528,13 @@ class Simulation {
       b.w = vel_[i].w;
     }
     previous_.clear();
+    previous_dt_ = dt_;
     for (const Contact& c : contacts_) previous_.emplace_back(c.key, c.impulse);
     std::sort(previous_.begin(), previous_.end());
   }
 
   void integrate() {
-    const double dt = options_.dt, rest = options_.rest_speed;
+    const double dt = dt_, rest = options_.rest_speed;
     for (int i = 0; i < n_; ++i) {
       Body& b = bodies_[i];
       if (b.state == State::kAsleep) continue;
@@ -570,7 +604,9 @@ class Simulation {
   int n_;
   std::vector<Body> bodies_;  // the blocks, then the surface
   double inv_inertia_ = 0.0, reach_ = 0.0;
-  std::vector<int> awake_, by_height_;
+  double dt_ = 0.0, previous_dt_ = 1.0;  // this step's and the last step's length
+  std::vector<int> awake_, by_height_, woken_list_;
+  std::vector<char> woken_;  // woken in this step (their pairs with sleeping blocks are still to be found)
   std::vector<int> sleepers_;         // sleeping blocks by the bottom of their boxes
   std::vector<double> sleeper_lo_y_;  // those bottoms
   double sleeper_extent_ = 0.0;       // the tallest sleeping block's box
