@@ -123,5 +123,6 @@ TEST_CASE("the folder source skips unreadable images and lists only image files"
   int read = 0;
   while (source->next(frame)) ++read;
   CHECK(read == 2);
+  CHECK(source->unreadable() == 1);  // bricklayer-camera and bricklayer-vision count it as an error
   fs::remove_all(dir);
 }

@@ -45,7 +45,10 @@ class CameraProcess {
       if (std::chrono::steady_clock::now() < due) return;
     }
     cv::Mat frame;
-    if (!source_->next(frame)) {
+    const bool got = source_->next(frame);
+    module_.counters().errors += source_->unreadable() - unreadable_seen_;  // skipped frames are errors
+    unreadable_seen_ = source_->unreadable();
+    if (!got) {
       log::info(source_->describe(), ": no more frames after ", frame_number_);
       Module::request_stop();
       return;
@@ -72,6 +75,7 @@ class CameraProcess {
 
   Module module_;  // owns the LCM handle
   std::unique_ptr<camera::FrameSource> source_;
+  int64_t unreadable_seen_ = 0;
   std::string format_;
   int quality_;
   std::string image_channel_;

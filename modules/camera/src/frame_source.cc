@@ -86,6 +86,7 @@ class FolderSource final : public FrameSource {
       const fs::path& file = files_[index_++];
       frame = cv::imread(file.string(), cv::IMREAD_COLOR);
       if (!frame.empty()) return true;
+      ++unreadable_;
       log::warn("skipping unreadable image ", file.string());
     }
     return false;
@@ -93,6 +94,7 @@ class FolderSource final : public FrameSource {
   double rate() const override { return fps_; }
   bool live() const override { return false; }
   std::string describe() const override { return "folder " + dir_ + " (" + std::to_string(files_.size()) + " images)"; }
+  int64_t unreadable() const override { return unreadable_; }
 
  private:
   std::string dir_;
@@ -100,6 +102,7 @@ class FolderSource final : public FrameSource {
   double fps_;
   bool loop_;
   size_t index_ = 0;
+  int64_t unreadable_ = 0;
 };
 
 }  // namespace

@@ -131,7 +131,10 @@ class Vision {
       if (source_done_ || (!source_->live() && std::chrono::steady_clock::now() < next_frame_)) return;
       next_frame_ += period_;
       cv::Mat frame;
-      if (!source_->next(frame)) {
+      const bool got = source_->next(frame);
+      module_.counters().errors += source_->unreadable() - unreadable_seen_;  // skipped images are errors
+      unreadable_seen_ = source_->unreadable();
+      if (!got) {
         source_done_ = true;
         log::info(source_->describe(), " exhausted after ", frames_seen_, " frames");
         module_.set_status("source exhausted");
@@ -213,6 +216,7 @@ class Vision {
   TemporalFilter filter_;
   bool use_filter_;
   std::unique_ptr<camera::FrameSource> source_;
+  int64_t unreadable_seen_ = 0;
   bool source_done_ = false;
   int64_t source_frames_ = 0;
   std::chrono::steady_clock::duration period_;

@@ -22,6 +22,9 @@ class FrameSource {
   // True for a live camera: it paces itself, so the publisher must not sleep between frames.
   virtual bool live() const = 0;
   virtual std::string describe() const = 0;
+  // Frames the source could not read and skipped (a corrupt image in a folder), so far: the caller counts
+  // them as errors (a skipped frame must not vanish silently).
+  virtual int64_t unreadable() const { return 0; }
 };
 
 // A V4L2 camera: "0" or "/dev/video0". Keeps a one-frame driver buffer (only the newest frame), locks
@@ -33,7 +36,7 @@ std::unique_ptr<FrameSource> open_camera(const std::string& device, int width, i
 std::unique_ptr<FrameSource> open_video(const std::string& path, double fps, bool loop);
 
 // The images of a folder in name order (png, jpg, jpeg, bmp, tif, tiff), paced at fps. An unreadable
-// image is skipped with a warning. Throws when the folder is missing or holds no image.
+// image is skipped with a warning and counted in unreadable(). Throws when the folder is missing or holds no image.
 std::unique_ptr<FrameSource> open_folder(const std::string& dir, double fps, bool loop);
 
 // The image files of dir in name order.
