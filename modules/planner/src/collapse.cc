@@ -30,7 +30,7 @@ constexpr double kWakeSpeed = 0.3;   // approach speed at which a moving block w
 constexpr double kMinAwake = 1.0;
 constexpr double kClearance = 0.1;
 // Steps are doubled while no awake block moves faster than this (block lengths per time unit, at its ends).
-constexpr double kCalmSpeed = 0.5;   // a block sliding alone on the surface is this far from every other block
+constexpr double kCalmSpeed = 1.0;   // a block sliding alone on the surface is this far from every other block
 
 enum class State : uint8_t { kAsleep, kAwake, kFalling };
 
