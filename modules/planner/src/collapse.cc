@@ -555,6 +555,13 @@ class Simulation {
   void settle_islands() {
     std::vector<IslandState>& info = island_states_;
     info.assign(islands_, IslandState{});
+    on_surface_.assign(n_, 0);
+    for (const Contact& c : contacts_) {
+      const Body &A = bodies_[c.a], &B = bodies_[c.b];
+      if (B.is_table) on_surface_[c.a] = 1;
+      else if (A.is_table) on_surface_[c.b] = 1;
+      else if (!A.awake() || !B.awake()) info[c.island].touches_pile = true;  // a sleeping block: part of the pile
+    }
     const double rest_time = options_.rest_time - 1e-9;
     for (int i = 0; i < n_; ++i) {
       const Body& b = bodies_[i];
@@ -563,19 +570,15 @@ class Simulation {
       const bool settled = b.awake_for >= kMinAwake - 1e-9;
       s.still = s.still && settled && b.still_for >= rest_time;
       s.flat = s.flat && settled && b.flat_for >= rest_time;
-      s.over_surface = s.over_surface && b.c.x < edge_;
-    }
-    for (const Contact& c : contacts_) {
-      IslandState& s = info[c.island];
-      const Body &A = bodies_[c.a], &B = bodies_[c.b];
-      if (A.is_table || B.is_table) s.on_surface = true;
-      else if (!A.awake() || !B.awake()) s.touches_pile = true;  // a sleeping block: part of the pile
+      // Every block of a sliding island lies on the surface itself: a whole wall that lost its top is still
+      // the pile, not debris that slid away from it.
+      s.on_surface = s.on_surface && on_surface_[i] && b.c.x < edge_;
     }
     for (int k = 0; k < islands_; ++k) {
       const IslandState& s = info[k];
       if (s.still) {
         settle(k, false);
-      } else if (s.flat && s.on_surface && !s.touches_pile && s.over_surface && clear_of_others(k)) {
+      } else if (s.flat && s.on_surface && !s.touches_pile && clear_of_others(k)) {
         settle(k, true);
       }
     }
@@ -617,9 +620,10 @@ class Simulation {
   std::vector<int> parent_, island_index_, island_start_, island_fill_;
   int islands_ = 0;
   struct IslandState {
-    bool still = true, flat = true, on_surface = false, touches_pile = false, over_surface = true;
+    bool still = true, flat = true, on_surface = true, touches_pile = false;
   };
   std::vector<IslandState> island_states_;
+  std::vector<char> on_surface_;  // per block: touches the surface in this step
   CollapsePreview out_;
 };
 

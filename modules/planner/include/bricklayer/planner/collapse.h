@@ -12,7 +12,8 @@
 // Awake blocks that touch one another form islands; an island whose blocks have all been still for
 // `rest_time` falls asleep (at rest). A block leaves the pile, and stops costing contact work, in two ways:
 //   - it falls past the surface edge (its highest point below the surface): from then on it falls freely;
-//   - it slides alone on the surface (touching no block, lying flat, clear of every other block): it stops
+//   - it slides alone on the surface (lying flat on the surface itself, touching no block of the pile, clear
+//     of every other block; a group of such blocks touching only one another counts too): it stops
 //     where it is. The frictionless model would let it slide forever; a real table's friction stops it.
 //     It stays an obstacle (asleep), so debris still lands on it and wakes it.
 // The simulation ends when no block in the pile is awake (every block at rest or gone) and the blocks that
