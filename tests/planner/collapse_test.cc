@@ -188,6 +188,22 @@ TEST_CASE("falling debris wakes a balanced block it strikes") {
   CHECK(p.end[0] != BlockEnd::kUntouched);
 }
 
+TEST_CASE("a blow on top of a balanced tower wakes the top, not the whole tower") {
+  // 30 stable blocks in a column well inside the edge; a block dropped from 10 rows above lands on top. The
+  // struck block passes the blow to the sleeping block under it (its contacts are found in the same step);
+  // it must not be driven into it and wake it, and so on down the tower.
+  CollapseInput in;
+  for (int r = 0; r < 30; ++r) in.blocks.push_back({r, -1.2, false});
+  in.blocks.push_back({40, -1.2, true});
+  const CollapsePreview p = simulate_collapse(in);
+  CHECK(p.end[29] != BlockEnd::kUntouched);  // struck
+  int untouched = 0;
+  for (int r = 0; r < 30; ++r) untouched += p.end[r] == BlockEnd::kUntouched;
+  CHECK(untouched >= 26);
+  CHECK(p.came_to_rest);
+  CHECK(p.frames.back()[30].y == Approx((30 + 0.5) / 3.0).margin(0.02));  // the dropped block rests on top
+}
+
 TEST_CASE("bad input is an error") {
   CollapseInput in;
   in.blocks.push_back({0, std::nan(""), true});
