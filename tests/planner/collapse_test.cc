@@ -140,7 +140,8 @@ TEST_CASE("a 60-block wall whose top rows are pushed over the edge: the preview 
   CHECK(count(p, BlockEnd::kMoving) == 0);
   CHECK(count(p, BlockEnd::kFellOff) > 0);
   for (const auto& frame : p.frames)
-    for (const Pose& pose : frame) REQUIRE((std::isfinite(pose.x) && std::isfinite(pose.y) && std::isfinite(pose.angle)));
+    for (const Pose& pose : frame)
+      REQUIRE((std::isfinite(pose.x) && std::isfinite(pose.y) && std::isfinite(pose.angle)));
   // The bottom rows are far from the debris: untouched.
   for (size_t i = 0; i < 20; ++i) CHECK(p.end[i] == BlockEnd::kUntouched);
   // Everything that fell is below where it started.
@@ -215,7 +216,8 @@ TEST_CASE("bad input is an error") {
   row.blocks.push_back({-1, 0.0, true});
   CHECK_THROWS_AS(simulate_collapse(row), std::invalid_argument);
   const CollapseInput ok = toppling_tower(3, 1, 0.7);
-  for (auto bad : {+[](CollapseOptions& o) { o.dt = 0; }, +[](CollapseOptions& o) { o.max_time = std::numeric_limits<double>::infinity(); },
+  for (auto bad : {+[](CollapseOptions& o) { o.dt = 0; },
+                   +[](CollapseOptions& o) { o.max_time = std::numeric_limits<double>::infinity(); },
                    +[](CollapseOptions& o) { o.max_time = 1e9; }, +[](CollapseOptions& o) { o.max_iterations = 0; },
                    +[](CollapseOptions& o) { o.tolerance = std::nan(""); },
                    +[](CollapseOptions& o) { o.rest_speed = -1; }, +[](CollapseOptions& o) { o.fall_depth = -1; },

@@ -137,7 +137,8 @@ int main(int argc, char** argv) {
   for (const auto& k : kinds) {
     report(std::string("collapse preview: ") + k.name, k.stats.ms);
     const double n = static_cast<double>(k.stats.ms.size());
-    std::printf("    mean moving blocks %.1f, ended before max_time %d/%zu, mean steps %.0f, mean end %.2f time units\n",
+    std::printf("    mean moving blocks %.1f, ended before max_time %d/%zu, mean steps %.0f, mean end %.2f time "
+                "units\n",
                 k.stats.moving / n, k.stats.ended, k.stats.ms.size(), k.stats.steps / n, k.stats.end_time / n);
   }
   report("collapse preview: all kinds", all);

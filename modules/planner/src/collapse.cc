@@ -21,7 +21,8 @@ double dot(Vec a, Vec b) { return a.x * b.x + a.y * b.y; }
 double cross(Vec a, Vec b) { return a.x * b.y - a.y * b.x; }
 Vec cross(double w, Vec r) { return {-w * r.y, w * r.x}; }
 
-constexpr double kMargin = 0.02;     // contacts are found this far apart (speculative), plus what the pair moves in a step
+// Contacts are found this far apart (speculative), plus what the pair can move in the step.
+constexpr double kMargin = 0.02;
 constexpr double kSlop = 0.002;      // penetration tolerated without correction
 constexpr double kBaumgarte = 0.2;   // fraction of the penetration (beyond the slop) corrected per step
 constexpr double kWakeSpeed = 0.3;   // approach speed at which a moving block wakes a sleeping one it strikes

@@ -1,16 +1,17 @@
 // Collapse preview: how the pile will fall, in the frictionless model of shared DESIGN.md "The physics".
 //
 // Rigid 2D blocks (length 1, height h, unit mass, I = (1 + h^2)/12, g = 1 in block lengths and the time unit
-// sqrt(block length / g)). Semi-implicit Euler; each step finds the current contacts (box-box manifolds,
-// Box2D style: reference face of least penetration, incident edge clipped to it, so a block on a block
-// touches at the two ends of the contact interval; the surface is a static box x <= edge, y <= 0) and solves
-// the frictionless velocity problem (normal impulses >= 0, non-penetration with a small Baumgarte bias) by
-// projected Gauss-Seidel, warm-started from the previous step's impulses.
+// sqrt(block length / g)). Semi-implicit Euler, steps of dt, doubled while every awake block is slow; each step
+// finds the current contacts (box-box manifolds, Box2D style: reference face of least penetration, incident edge
+// clipped to it, so a block on a block touches at the two ends of the contact interval; the surface is a static
+// box x <= edge, y <= 0) and solves the frictionless velocity problem (normal impulses >= 0, non-penetration
+// with a small Baumgarte bias) by projected Gauss-Seidel, warm-started from the previous step's impulses.
 //
 // Blocks the prediction calls stable start asleep (static) and wake when something they rest on moves or
 // when a moving block strikes them, so the balanced part stays exactly where it is unless debris hits it.
-// Awake blocks that touch one another form islands; an island whose blocks have all been still for
-// `rest_time` falls asleep (at rest). A block leaves the pile, and stops costing contact work, in two ways:
+// Awake blocks that touch one another form islands; an island whose blocks have all been awake for at least one
+// time unit (a block just past its balance point starts to tip very slowly) and still for `rest_time` falls
+// asleep (at rest). A block leaves the pile, and stops costing contact work, in two ways:
 //   - it falls past the surface edge (its highest point below the surface): from then on it falls freely;
 //   - it slides alone on the surface (lying flat on the surface itself, touching no block of the pile, clear
 //     of every other block; a group of such blocks touching only one another counts too): it stops
@@ -48,8 +49,8 @@ struct CollapseOptions {
   double max_time = 8.0;             // time units
   double key_frame_interval = 0.2;   // time units between key frames (the first is t = 0)
   int max_iterations = 8;            // Gauss-Seidel sweeps per island and step at most
-  double tolerance = 1e-4;           // sweeps stop early when no impulse changes by more than this (gravity gives 1 per time unit)
-  double rest_speed = 0.01;          // block lengths per time unit: a block whose ends move slower is still
+  double tolerance = 1e-4;           // sweeps stop early when no impulse changes by more than this
+  double rest_speed = 0.01;          // block lengths per time unit: still = vertical speed and spin (at the ends) below
   // Sideways drift that still counts as rest for a block that is otherwise still (no vertical speed, no spin).
   // Frictionless, a block that came down flat keeps whatever sideways speed the contacts gave it, for ever;
   // real blocks have friction and stop. 0.1 block lengths per time unit = 8.6 cm/s for 7.5 cm blocks.
@@ -73,7 +74,7 @@ struct CollapsePreview {
   std::vector<BlockEnd> end;                // per block
   std::vector<bool> left_pile;              // per block: kSlidAway or kFellOff
   bool came_to_rest = false;                // ended before max_time: every block at rest or gone
-  int steps = 0;
+  int steps = 0;                            // time steps taken (double steps count once)
 };
 
 // Seconds per time unit for real blocks (7.5 cm long, g = 9.81 m/s^2).
