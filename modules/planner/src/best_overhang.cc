@@ -678,6 +678,8 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
       for (const auto& seed : grown(s.blocks)) consider(seed);
     if (n >= 8)
       for (const auto& seed : wall_seeds(n, options.wall_seeds, rng)) consider(seed);
+    if (static_cast<size_t>(n) <= options.start_layouts.size() && !options.start_layouts[n - 1].blocks.empty())
+      consider(options.start_layouts[n - 1].blocks);
     // Seeded restarts around the best few.
     std::vector<OverhangStack> ranked;
     for (auto& [key, s] : found) ranked.push_back(s);

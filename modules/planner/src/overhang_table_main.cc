@@ -31,6 +31,7 @@ int Main(int argc, char** argv) {
   flags.add("tolerance", "1e-9", "largest accepted constraint residual of an optimised stack");
   flags.add("resume", "", "stacks file of an earlier run: keep its results for n = 1..--resume-n and continue");
   flags.add("resume-n", "0", "with --resume: how many of its results to keep");
+  flags.add("start-layouts", "", "stacks file of an earlier run: each of its stacks is one more start layout at its n");
   flags.add("log-level", "info", "debug, info, warn or error");
   if (!flags.parse(argc, argv)) return 0;
   log::set_level(log::parse_level(flags.get("log-level")));
@@ -46,21 +47,33 @@ int Main(int argc, char** argv) {
     throw FlagError("--beam must be >= 1; --perturbations, --wall-seeds and --moves >= 0");
   options.tolerance = flags.get_double("tolerance");
   if (!(options.tolerance > 0 && options.tolerance < 1e-3)) throw FlagError("--tolerance must be in (0, 1e-3)");
-  if (!flags.get("resume").empty()) {
-    std::ifstream in(flags.get("resume"));
-    if (!in) throw FlagError("--resume: cannot read " + flags.get("resume"));
+  // Stacks n = 1..count of a stacks file written by this program.
+  auto read_stacks = [](const std::string& flag, const std::string& path, int64_t count) {
+    std::ifstream in(path);
+    if (!in) throw FlagError("--" + flag + ": cannot read " + path);
     const nlohmann::json old = nlohmann::json::parse(in);
-    const int64_t keep = flags.get_int("resume-n");
-    if (keep < 1 || keep >= max_n) throw FlagError("--resume-n must be between 1 and --max-n - 1");
-    for (int n = 1; n <= keep; ++n) {
-      const auto& e = old.at(std::to_string(n));
+    std::vector<planner::OverhangStack> out;
+    for (int n = 1; n <= count; ++n) {
+      const std::string key = std::to_string(n);
+      if (!old.contains(key)) throw FlagError("--" + flag + ": " + path + " has no stack for n = " + key);
+      const auto& e = old.at(key);
       planner::OverhangStack s;
       s.overhang = e.at("overhang").get<double>();
       s.residual = e.at("residual").get<double>();
       for (const auto& b : e.at("blocks")) s.blocks.push_back({b.at("row").get<int>(), b.at("x").get<double>()});
-      options.resume_from.push_back(std::move(s));
+      if (s.blocks.size() != static_cast<size_t>(n))
+        throw FlagError("--" + flag + ": " + path + ": stack " + key + " does not have " + key + " blocks");
+      out.push_back(std::move(s));
     }
+    return out;
+  };
+  if (!flags.get("resume").empty()) {
+    const int64_t keep = flags.get_int("resume-n");
+    if (keep < 1 || keep >= max_n) throw FlagError("--resume-n must be between 1 and --max-n - 1");
+    options.resume_from = read_stacks("resume", flags.get("resume"), keep);
   }
+  if (!flags.get("start-layouts").empty())
+    options.start_layouts = read_stacks("start-layouts", flags.get("start-layouts"), max_n);
 
   nlohmann::ordered_json table = nlohmann::ordered_json::object();
   nlohmann::ordered_json stacks = nlohmann::ordered_json::object();

@@ -50,6 +50,9 @@ struct OverhangSearchOptions {
   // Results already known for n = 1..k (e.g. from an earlier run's stacks file): the search continues at
   // n = k+1 with the last of them as its only layout.
   std::vector<OverhangStack> resume_from;
+  // Extra start layouts, index n-1 (e.g. an earlier run's stacks file): each is re-optimised at its n as one
+  // more candidate, so a run never ends below the layouts it was given (path-dependent beam searches differ).
+  std::vector<OverhangStack> start_layouts;
 };
 
 // Best stacks for n = 1..n_max (index n-1). progress(n, best) is called after each n when given.
