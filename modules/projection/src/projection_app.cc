@@ -145,7 +145,22 @@ void ProjectionApp::wait_for_bus(int wait_ms) {
   }
 }
 
+// A new stack is drawn together with its prediction. Drawing it alone (its colours still unknown) would
+// spend a whole draw just before the prediction arrives (a fraction of a millisecond later) and delay the
+// frame that matters by that draw. So while predictions are flowing, a new stack waits for its own
+// prediction up to kPredictionHoldMs; without a prediction process it is drawn at once.
+constexpr int64_t kPredictionHoldMs = 15;
+constexpr int64_t kPredictionsFlowingMs = 2000;
+
+bool ProjectionApp::awaiting_prediction() const {
+  const int64_t now = now_ms();
+  return stack_arrived_ms_ >= 0 && now - stack_arrived_ms_ < kPredictionHoldMs &&
+         now - last_prediction_ms_ < kPredictionsFlowingMs && !pattern_ && scene_.prediction_for_stack() == nullptr;
+}
+
 void ProjectionApp::step(int wait_ms) {
+  if (awaiting_prediction())
+    wait_ms = std::min<int>(wait_ms, static_cast<int>(std::max<int64_t>(1, stack_arrived_ms_ + kPredictionHoldMs - now_ms())));
   wait_for_bus(wait_ms);
   handle_events();
   try {
@@ -153,7 +168,7 @@ void ProjectionApp::step(int wait_ms) {
     tick();
     const bool animating = !pattern_ && scene_.preview_for_stack() != nullptr;
     const bool refresh = display_->mode() != DisplayMode::kHeadless;  // a real screen redraws every refresh
-    if (dirty_ || animating || refresh) draw_and_present();
+    if ((dirty_ || animating || refresh) && !awaiting_prediction()) draw_and_present();
     capture_if_due();
   } catch (const std::exception& e) {
     ++module_.counters().errors;
@@ -222,6 +237,7 @@ void ProjectionApp::apply_inputs() {
         log::warn(rejected, " block(s) of frame ", s->frame_number, " rejected (non-finite x or bad row)");
       }
       dirty_ = true;
+      stack_arrived_ms_ = now_ms();
     } catch (const std::exception& e) {
       ++module_.counters().errors;
       log::warn("stack rejected: ", e.what());
@@ -230,6 +246,7 @@ void ProjectionApp::apply_inputs() {
   if (auto p = prediction_in_.take()) {
     try {
       scene_.set_prediction(*p);
+      last_prediction_ms_ = now_ms();
       pending_latency_ = prediction_stamp_;
       dirty_ = true;
     } catch (const std::exception& e) {

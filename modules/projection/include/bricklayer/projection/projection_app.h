@@ -100,6 +100,7 @@ class ProjectionApp {
   void capture_if_due();
   void publish_round();
   void request_hint();
+  bool awaiting_prediction() const;
   int64_t now_ms() const;
   int64_t now_us() const;
 
@@ -142,6 +143,8 @@ class ProjectionApp {
   int64_t next_heartbeat_ms_ = 0;
   int64_t next_refresh_ms_ = 0;
   int64_t hint_sequence_ = 0;
+  int64_t stack_arrived_ms_ = -1;       // when the drawn stack arrived
+  int64_t last_prediction_ms_ = -100000;  // when the last prediction arrived
   std::chrono::steady_clock::time_point started_;
 };
 
