@@ -145,20 +145,20 @@ class Vision {
       // rate, so a replay of the same folder or video gives the same messages.
       const int64_t number = source_frames_++;
       const int64_t utime = source_->live() ? wall_utime() : static_cast<int64_t>(number * 1e6 / source_->rate());
-      Process(frame, utime, number, wall_utime(), "");
+      Process(frame, utime, number, wall_utime(), "", std::chrono::steady_clock::now());
       return;
     }
     auto item = frames_.take();
     if (!item) return;
     std::string error;
+    const auto start = std::chrono::steady_clock::now();  // the stage's time includes decoding the frame
     const cv::Mat frame = decode_image(item->image, &error);
-    Process(frame, item->image.utime, item->image.frame_number, item->received_utime, error);
+    Process(frame, item->image.utime, item->image.frame_number, item->received_utime, error, start);
   }
 
   void Process(const cv::Mat& frame, int64_t utime, int64_t frame_number, int64_t received_utime,
-               const std::string& decode_error) {
+               const std::string& decode_error, std::chrono::steady_clock::time_point start) {
     ++frames_seen_;
-    const auto start = std::chrono::steady_clock::now();
     Detection d;
     if (frame.empty()) {
       d.status = Detection::kNoFrame;
