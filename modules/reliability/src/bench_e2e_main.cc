@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -43,6 +44,7 @@ namespace {
 
 constexpr const char* kHostUrl = "udpm://239.255.76.67:7667?ttl=0";
 constexpr const char* kLanUrl = "udpm://239.255.76.67:7667?ttl=1";
+constexpr int64_t kFramesPerPile = 30;
 
 int64_t wall_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
@@ -98,6 +100,7 @@ struct Row {
   size_t published = 0, presented = 0;
   double detected = 0;
   double median_ms = 0, p99_ms = 0, max_ms = 0;
+  std::string breakdown;  // median ms after publication at which each module received / finished a frame
 };
 
 class Bench {
@@ -119,6 +122,7 @@ class Bench {
     presented_.clear();
     stacks_ = 0;
     blocks_seen_ = 0;
+    stages_.clear();
     int64_t frame = 1000000 * blocks;  // distinct frame numbers per row
     const auto start = Clock::now();
     const double total = warmup + seconds;
@@ -135,7 +139,9 @@ class Bench {
         m.height = frames.size.height;
         m.format = image_t::FORMAT_JPEG;
         m.source = "bench-e2e";
-        m.data = frames.jpeg[static_cast<size_t>(m.frame_number) % frames.jpeg.size()];
+        // Each pile stays in view for half a second, as a player's pile does: vision's temporal filter
+        // confirms its blocks, so the stack (and the work downstream) has the row's block count.
+        m.data = frames.jpeg[static_cast<size_t>(m.frame_number / kFramesPerPile) % frames.jpeg.size()];
         m.size = static_cast<int32_t>(m.data.size());
         m.utime = wall_us();
         lcm_->publish(channel(kImageChannel), &m);
@@ -168,12 +174,33 @@ class Bench {
       r.p99_ms = lat[std::min(lat.size() - 1, static_cast<size_t>(0.99 * lat.size()))];
       r.max_ms = lat.back();
     }
+    // Where the time goes, for the frames that reached the screen: median ms after the camera published
+    // the frame at which each module received it and finished with it.
+    std::ostringstream breakdown;
+    for (const char* module : {"vision", "prediction", "projection"}) {
+      std::vector<double> in, out;
+      for (const auto& [f, present] : presented_) {
+        const auto pub = published_.find(f);
+        const auto& m = stages_[module];
+        const auto st = m.find(f);
+        if (pub == published_.end() || st == m.end()) continue;
+        in.push_back((st->second.first - pub->second) / 1000.0);
+        out.push_back((st->second.first + st->second.second - pub->second) / 1000.0);
+      }
+      if (in.empty()) continue;
+      std::nth_element(in.begin(), in.begin() + in.size() / 2, in.end());
+      std::nth_element(out.begin(), out.begin() + out.size() / 2, out.end());
+      breakdown << (breakdown.tellp() > 0 ? ", " : "") << module << " in " << std::fixed << std::setprecision(2)
+                << in[in.size() / 2] << " done " << out[out.size() / 2];
+    }
+    r.breakdown = breakdown.str();
     return r;
   }
 
  private:
   void OnTiming(const lcm::ReceiveBuffer*, const std::string&, const timing_t* t) {
     if (t->module == "projection" && t->stage == "present") presented_[t->frame_number] = t->received_utime + t->elapsed_us;
+    stages_[t->module][t->frame_number] = {t->received_utime, t->elapsed_us};
   }
   void OnStack(const lcm::ReceiveBuffer*, const std::string&, const stack_t* s) {
     ++stacks_;
@@ -185,6 +212,8 @@ class Bench {
 
   std::unique_ptr<lcm::LCM> lcm_;
   std::map<int64_t, int64_t> published_, presented_;
+  // module -> frame -> (received wall clock, elapsed us), for the per-stage breakdown.
+  std::map<std::string, std::map<int64_t, std::pair<int64_t, int64_t>>> stages_;
   std::map<std::string, int> modules_;
   int64_t stacks_ = 0, blocks_seen_ = 0;
 };
@@ -248,6 +277,7 @@ int Main(int argc, char** argv) {
       const Row& r = rows.back();
       std::fprintf(stderr, "%s %d blocks: median %.2f ms p99 %.2f ms (%zu of %zu frames presented)\n", r.setup.c_str(),
                    r.blocks, r.median_ms, r.p99_ms, r.presented, r.published);
+      std::fprintf(stderr, "  where the time goes (median ms after publication): %s\n", r.breakdown.c_str());
     }
   }
   std::printf("| setup | blocks (detected) | frames published | presented | median ms | p99 ms | max ms |\n");
