@@ -352,15 +352,16 @@ int Soak::report() {
   };
   std::cout << "\nsoak: " << duration_ << " s, " << blocks_ << " blocks, " << fps_ << " frames/s, "
             << frame_number_ << " frames published" << (drill_ ? ", fault drill" : "") << "\n";
-  std::cout << "module       pid(s)        RSS start->end MB   HWM end MB  received published dropped errors "
+  std::cout << "module       pid(s)        RSS start->end MB   peak (HWM) start->end MB  received published dropped errors "
                "restarts worst-hb-gap s\n";
   for (const auto& name : watched()) {
     const ModuleWatch& w = watch_.at(name);
     std::ostringstream pids;
     for (int p : w.pids) pids << (pids.tellp() ? "," : "") << p;
     char line[300];
-    std::snprintf(line, sizeof line, "%-12s %-13s %7.1f -> %7.1f   %9.1f  %8lld %9lld %7lld %6lld %8d %8.2f\n", name.c_str(),
-                  pids.str().c_str(), w.mem_start.rss_kb / 1024.0, w.mem_end.rss_kb / 1024.0, w.mem_end.hwm_kb / 1024.0,
+    std::snprintf(line, sizeof line, "%-12s %-13s %7.1f -> %7.1f   %9.1f -> %9.1f     %8lld %9lld %7lld %6lld %8d %8.2f\n", name.c_str(),
+                  pids.str().c_str(), w.mem_start.rss_kb / 1024.0, w.mem_end.rss_kb / 1024.0, w.mem_start.hwm_kb / 1024.0,
+                  w.mem_end.hwm_kb / 1024.0,
                   (long long)(w.retired_received + w.last.received), (long long)(w.retired_published + w.last.published),
                   (long long)(w.retired_dropped + w.last.dropped), (long long)(w.retired_errors + w.last.errors),
                   w.restarts, w.worst_gap);
