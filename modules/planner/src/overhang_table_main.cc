@@ -1,4 +1,4 @@
-// bricklayer-overhang-table: computes the best possible overhang of n = 1..N blocks with the NLopt optimiser
+// bricklayer-overhang-table: computes the best possible overhang of n = 1..N blocks with the SLP optimiser on CLP
 // (bricklayer/planner/best_overhang.h) and writes the table the score display reads
 // ({"1": 0.5, "2": 0.75, ...}) plus the stacks themselves (for verification and display).
 // Deterministic for a given --seed. Not a bus process.
