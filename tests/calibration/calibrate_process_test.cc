@@ -162,6 +162,12 @@ class FakeRig {
     return std::nullopt;
   }
 
+  // Blocks standing on the board in the following frames.
+  void set_scene(const core::Stack& scene) {
+    scene_ = scene;
+    render_frame();
+  }
+
   int corrupt_every = 0;  // > 0: every n-th frame carries garbage instead of a JPEG
 
   std::optional<calibration_t> published;
@@ -200,7 +206,7 @@ class FakeRig {
 
   void render_frame() {
     const cv::Mat* image = shown_.empty() ? nullptr : &shown_;
-    const cv::Mat bgr = renderer_.render(core::Stack{}, nuisance_, image, 1234).bgr;
+    const cv::Mat bgr = renderer_.render(scene_, nuisance_, image, 1234).bgr;
     cv::imencode(".jpg", bgr, jpeg_, {cv::IMWRITE_JPEG_QUALITY, 95});
     size_ = bgr.size();
   }
@@ -225,6 +231,7 @@ class FakeRig {
   sim::Renderer renderer_;
   bool answer_projector_;
   sim::Nuisance nuisance_;
+  core::Stack scene_;
   cv::Mat shown_;
   std::vector<uint8_t> jpeg_;
   cv::Size size_;
@@ -350,6 +357,140 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
   std::remove(output.c_str());
 }
 
+// Where the camera sees board point (x, 0.2) (block lengths) according to a calibration: its board x.
+double calibrated_x(const calibration_t& c, const sim::CameraSetup& camera, double x) {
+  const BoardGeometry& g = camera.board;
+  const cv::Point2d p = sim::rectified_to_camera(camera, {g.to_px_x(x), g.to_px_y(0.2)});
+  return cal::camera_to_board(c, p).x;
+}
+
+TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of a projector mounted larger than nominal") {
+  const uint64_t seed = 6;
+  const sim::CameraSetup camera = sim::CameraSetup::random(seed);
+  sim::ProjectorSetup projector = sim::ProjectorSetup::random(seed);
+  // Each projector pixel covers 10% more board than the nominal mounting assumes (about the view's centre).
+  const cv::Matx33d larger(1.1, 0, -0.1 * 320, 0, 1.1, -0.1 * 240, 0, 0, 1);
+  projector.projector_to_rectified = larger * projector.projector_to_rectified;
+  const std::string output = temp("scaled.json");
+  std::remove(output.c_str());
+  {
+    FakeRig rig(camera, projector);
+    const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--timeout", "3"}, temp("scaled-cal.err"));
+    const int code = rig.run_until_exit(child);
+    INFO(slurp(child.stderr_path));
+    REQUIRE(code == 0);
+  }
+  const calibration_t before = cal::load_calibration(output);
+  INFO("board x of true x = 3 before: " << calibrated_x(before, camera, 3.0));
+  CHECK(std::abs(calibrated_x(before, camera, 3.0) - 3.0) > 0.2);  // the projector's scale error
+
+  core::Stack blocks;  // four blocks standing apart on the bottom row, one on top
+  blocks.blocks = {{1, 0, -3.4}, {2, 0, -1.9}, {3, 0, -0.6}, {4, 0, 0.7}, {5, 1, -3.1}};
+  {
+    FakeRig rig(camera, projector);
+    rig.set_scene(blocks);
+    rig.corrupt_every = 4;  // undecodable frames are counted and skipped
+    const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--scale-from-blocks"}, temp("scale.err"));
+    const int code = rig.run_until_exit(child);
+    const std::string log = slurp(child.stderr_path);
+    INFO(log);
+    REQUIRE(code == 0);
+    CHECK(log.find("board scale corrected") != std::string::npos);
+    CHECK(log.find("could not be decoded") != std::string::npos);
+    REQUIRE(rig.published.has_value());
+    const calibration_t after = cal::load_calibration(output);
+    CHECK(after.utime == rig.published->utime);
+    for (double x : {-3.0, -1.0, 0.0, 1.0, 2.0, 3.0}) {
+      INFO("x " << x);
+      CHECK(calibrated_x(after, camera, x) == Approx(x).margin(0.01));
+    }
+    // A block from the edge to 1 read this long before: the heartbeat reports it.
+    const double read = calibrated_x(before, camera, 1.0) - calibrated_x(before, camera, 0.0);
+    CHECK(rig.heartbeat_value("block_length").value_or(0) == Approx(read).epsilon(0.005));
+    for (int i = 0; i < 9; ++i) CHECK(after.camera_to_projector[i] == before.camera_to_projector[i]);
+  }
+  {
+    // Measured again: right within --scale-min-correction, the file is left as it is.
+    const calibration_t corrected = cal::load_calibration(output);
+    FakeRig rig(camera, projector);
+    rig.set_scene(blocks);
+    const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--scale-from-blocks"}, temp("again.err"));
+    const int code = rig.run_until_exit(child);
+    const std::string log = slurp(child.stderr_path);
+    INFO(log);
+    CHECK(code == 0);
+    CHECK(log.find("left as it is") != std::string::npos);
+    CHECK(cal::load_calibration(output).utime == corrected.utime);
+  }
+  {
+    // An empty board: nothing to measure, a message saying what to do, the file untouched.
+    const calibration_t corrected = cal::load_calibration(output);
+    FakeRig rig(camera, projector);
+    const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--scale-from-blocks", "--scale-frames", "4"},
+                              temp("empty.err"));
+    const int code = rig.run_until_exit(child);
+    const std::string log = slurp(child.stderr_path);
+    INFO(log);
+    CHECK(code == 1);
+    CHECK(log.find("stand 3 or more blocks on the bottom row") != std::string::npos);
+    CHECK(cal::load_calibration(output).utime == corrected.utime);
+  }
+  {
+    // --serve serves a rewritten file (e.g. after --scale-from-blocks in another process) without a restart.
+    FakeRig rig(camera, projector);
+    const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--serve", "--republish", "0.3"},
+                              temp("reload.err"));
+    REQUIRE(rig.run_until([&] { return rig.published.has_value(); }, 10));
+    calibration_t rewritten = cal::load_calibration(output);
+    rewritten.utime += 1000;
+    cal::save_calibration(output, rewritten);
+    const bool served = rig.run_until([&] { return rig.published->utime == rewritten.utime; }, 5);
+    kill(child.pid, SIGTERM);
+    int status = 0;
+    waitpid(child.pid, &status, 0);
+    const std::string log = slurp(child.stderr_path);
+    INFO(log);
+    CHECK(served);
+    CHECK(log.find("it changed") != std::string::npos);
+  }
+  std::remove(output.c_str());
+}
+
+TEST_CASE("bricklayer-calibrate --serve waits for a calibration file that is not there yet, then serves it") {
+  // The exhibit's launcher starts --serve before anyone has calibrated: it must neither exit nor publish.
+  const sim::CameraSetup camera;
+  const sim::ProjectorSetup projector;
+  const std::string output = temp("later.json");
+  std::remove(output.c_str());
+  FakeRig rig(camera, projector);
+  const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--serve", "--republish", "0.3"},
+                            temp("later.err"));
+  rig.run_until([] { return false; }, 1.5);
+  int status = 0;
+  CHECK(waitpid(child.pid, &status, WNOHANG) == 0);  // still running
+  CHECK_FALSE(rig.published.has_value());
+  REQUIRE(rig.last_heartbeat.has_value());
+  CHECK(rig.last_heartbeat->status.find("no calibration yet") != std::string::npos);
+  rig.send_self_check();  // nothing to check: ignored, not a crash
+  rig.run_until([] { return false; }, 0.5);
+  CHECK(rig.patterns_shown == 0);
+
+  calibration_t written = cal::default_calibration();
+  written.utime = 4242;
+  cal::save_calibration(output, written);
+  const bool served = rig.run_until([&] { return rig.published.has_value(); }, 5);
+  kill(child.pid, SIGTERM);
+  waitpid(child.pid, &status, 0);
+  const std::string log = slurp(child.stderr_path);
+  INFO(log);
+  REQUIRE(served);
+  CHECK(rig.published->utime == 4242);
+  CHECK(log.find("SELF_CHECK ignored: no calibration") != std::string::npos);
+  CHECK(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+  std::remove(output.c_str());
+}
+
 TEST_CASE("bricklayer-calibrate fails clearly when the projector does not answer") {
   const sim::CameraSetup camera;
   const sim::ProjectorSetup projector;
@@ -378,6 +519,9 @@ TEST_CASE("bricklayer-calibrate refuses bad flags and a bad calibration file") {
       {{"--self-check", "--output", bad}, 1, "missing key"},
       {{"--self-check", "--output", temp("absent.json")}, 1, "cannot open"},
       {{"--board", temp("absent-board.json")}, 1, "absent-board.json"},
+      {{"--scale-from-blocks", "--serve"}, 2, "exclude each other"},
+      {{"--scale-from-blocks", "--scale-frames", "0"}, 2, "--scale-frames must be"},
+      {{"--scale-from-blocks", "--output", temp("absent.json")}, 1, "cannot open"},
   };
   for (const Case& c : cases) {
     std::vector<std::string> args = {program(), "--lcm-url", kUrl};

@@ -5,7 +5,9 @@
 // For seeds 1..N and a nuisance level: renders every calibration pattern through
 // CameraSetup::random(seed) / ProjectorSetup::random(seed), calibrates, and compares camera ->
 // projector with the truth over a grid covering the board. Prints per method the median and p99 (over
-// setups) of the mean and max mapping error, and the median / p99 time of compute_calibration.
+// setups) of the mean and max mapping error, and the median / p99 time of compute_calibration; for the
+// board frame: where the origin lands, how level the surface is, and how far board x is off along the
+// bottom row as calibrated and after the correction from blocks (vision/block_scale.h).
 //
 //   bricklayer-bench-calibration [--setups 20] [--nuisance mild] [--gray-code]
 #include <opencv2/imgproc.hpp>
@@ -22,6 +24,7 @@
 #include "bricklayer/calibration/patterns.h"
 #include "bricklayer/common/flags.h"
 #include "bricklayer/simcam/render.h"
+#include "bricklayer/vision/block_scale.h"
 
 namespace bricklayer {
 namespace {
@@ -30,7 +33,7 @@ namespace cal = calibration;
 namespace sim = simcam;
 
 struct Stats {
-  std::vector<double> mean, max, ms, colour, origin, level, shelf_found;
+  std::vector<double> mean, max, ms, colour, origin, level, shelf_found, board_x, board_x_fixed;
 };
 
 
@@ -39,6 +42,25 @@ double percentile(std::vector<double> v, double p) {
   std::sort(v.begin(), v.end());
   const size_t i = std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5));
   return v[i];
+}
+
+// Largest |board x - true x| along the bottom row (y = 0.2), x = -4..4 block lengths, where the camera sees it.
+double board_x_error(const calibration_t& c, const sim::CameraSetup& camera) {
+  double worst = 0;
+  for (double bx = -4; bx <= 4; bx += 0.25) {
+    const cv::Point2d p = sim::rectified_to_camera(camera, {camera.board.to_px_x(bx), camera.board.to_px_y(0.2)});
+    if (p.x < 2 || p.y < 2 || p.x > camera.size.width - 3 || p.y > camera.size.height - 3) continue;
+    worst = std::max(worst, std::abs(cal::camera_to_board(c, p).x - bx));
+  }
+  return worst;
+}
+
+// Four blocks standing apart along the bottom row, nudged a little per frame, and one on top.
+core::Stack blocks_apart(int frame) {
+  const double d = 0.011 * frame;
+  core::Stack s;
+  s.blocks = {{1, 0, -3.5 + d}, {2, 0, -2.1 - d}, {3, 0, -0.7 + d}, {4, 0, 0.6 - d}, {5, 1, -3.2 + d}};
+  return s;
 }
 
 void mapping_error(const calibration_t& c, const sim::CameraSetup& camera, const sim::ProjectorSetup& projector, Stats& s) {
@@ -132,6 +154,7 @@ int Main(int argc, char** argv) {
   flags.add("setups", "20", "random setups (seeds 1..N)");
   flags.add("nuisance", "mild", "simcam nuisance level: clean, mild, strong, harsh");
   flags.add_bool("no-shelf", "do not search the shelf (board frame from the defaults as given)");
+  flags.add_bool("verbose", "print the board x error of every setup");
   flags.add_bool("gray-code", "also measure a dense Gray-code map (32 more frames per setup; slow)");
   if (!flags.parse(argc, argv)) return 0;
   const int setups = static_cast<int>(flags.get_int("setups"));
@@ -140,6 +163,7 @@ int Main(int argc, char** argv) {
 
   cal::CalibrationOptions options;
   options.board_from_shelf = !flags.get_bool("no-shelf");
+  const bool verbose = flags.get_bool("verbose");
   const auto steps = cal::calibration_steps(options);
   Stats corners, centres, gray;
   int rejected = 0;
@@ -177,6 +201,23 @@ int Main(int argc, char** argv) {
       double level = 0;
       for (double bx = -4; bx <= 4; bx += 1) level = std::max(level, std::abs(at(bx, 0).y));
       corners.level.push_back(level);
+
+      // Board x along the bottom row, -4..4 block lengths: as calibrated (its scale comes from the projector)
+      // and after the correction from blocks (bricklayer-calibrate --scale-from-blocks: 10 frames of blocks
+      // standing apart on the bottom row).
+      const double worst_x = board_x_error(result.calibration, camera);
+      corners.board_x.push_back(worst_x);
+      vision::BlockScaleMeter meter(result.calibration);
+      for (int f = 0; f < 10; ++f) meter.add(renderer.render(blocks_apart(f), nuisance, nullptr, seed * 100 + 50 + f).bgr);
+      std::string why;
+      const auto fit = meter.result(20, 0.01, &why);
+      if (!fit) {
+        std::printf("seed %d: board scale not measured: %s\n", seed, why.c_str());
+      } else {
+        const double fixed = board_x_error(vision::apply_board_correction(result.calibration, *fit), camera);
+        corners.board_x_fixed.push_back(fixed);
+        if (verbose) std::printf("seed %d: board x error %.4f, after the correction from blocks %.4f\n", seed, worst_x, fixed);
+      }
     }
 
     // Centres only: the same detections without the corners.
@@ -216,6 +257,9 @@ int Main(int argc, char** argv) {
     std::printf("board frame: shelf found in %d of %zu; origin error median %.4f p99 %.4f, surface level within median %.4f p99 %.4f block lengths\n",
                 found, corners.shelf_found.size(), percentile(corners.origin, 0.5), percentile(corners.origin, 0.99),
                 percentile(corners.level, 0.5), percentile(corners.level, 0.99));
+    std::printf("board x on the bottom row (-4..4), worst per setup: as calibrated median %.4f p99 %.4f; corrected from blocks (%zu setups) median %.4f p99 %.4f block lengths\n",
+                percentile(corners.board_x, 0.5), percentile(corners.board_x, 0.99), corners.board_x_fixed.size(),
+                percentile(corners.board_x_fixed, 0.5), percentile(corners.board_x_fixed, 0.99));
   }
   report("markers, centres only", centres, "fit");
   report("Gray code, dense (bits >= 2)", gray, "fit");

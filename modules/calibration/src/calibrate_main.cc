@@ -12,8 +12,15 @@
 //   --self-check  load --output, project the self-check markers once, report the drift (exit 0, or
 //                 3 when it exceeds --drift-threshold).
 //   --write-default  write the uncalibrated default setup to --output and exit.
+//   --scale-from-blocks  load --output, measure how long blocks standing apart on the bottom row read in
+//                 its board frame over --scale-frames camera frames (vision/block_scale.h: the board's
+//                 scale comes from the projector and is off when the projector is not mounted square),
+//                 correct the board frame (scale and keystone along the board), save and publish (exit 0),
+//                 or say what to fix (exit 1).
 //   --serve       load --output, publish it (again every --republish seconds, so late starters catch
-//                 up), and run the self-check on every SELF_CHECK command while the board is empty
+//                 up; re-read when the file changes, e.g. after --scale-from-blocks; a missing or bad
+//                 file is waited for, not fatal: the launcher starts --serve before anyone calibrated), and run the
+//                 self-check on every SELF_CHECK command while the board is empty
 //                 (and every --self-check-every seconds once the board has been empty --empty-for seconds).
 // For every pattern: send SHOW_PATTERN, wait for projector_state_t echoing its sequence, then use the
 // camera frame received --skip-frames frames after the echo (frames already in flight show the
@@ -24,6 +31,7 @@
 
 #include <cmath>
 #include <deque>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -44,6 +52,7 @@
 #include "bricklayer/image_t.hpp"
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/stack_t.hpp"
+#include "bricklayer/vision/block_scale.h"
 
 namespace bricklayer {
 namespace {
@@ -52,6 +61,7 @@ namespace cal = calibration;
 
 constexpr int kExitRejected = 1;
 constexpr int kExitDrift = 3;
+constexpr double kScaleCheckHalfWidth = 4.0;  // block lengths either side of the edge a correction is judged over
 
 // A camera frame as BGR, or empty when it cannot be decoded (counted as an error by the caller).
 cv::Mat decode_frame(const image_t& img) {
@@ -105,6 +115,11 @@ struct Options {
   double republish_s = 5.0;
   double self_check_every_s = 0.0;  // --serve: automatic self-check period (0 = only on command)
   double empty_for_s = 5.0;         // the board must have been empty this long for an automatic check
+  int scale_frames = 10;            // --scale-from-blocks: camera frames measured
+  double scale_max_residual = 0.01;  // --scale-from-blocks: largest RMS relative error of the fitted block lengths
+  double scale_min_change = 0.02;    // --scale-from-blocks: corrections moving no point within 4 block lengths of
+                                     // the edge by more than this are within the measurement's own bias
+                                     // (blur: lengths up to 0.5% short) and are not applied
 };
 
 // Shows a list of patterns one at a time and collects one camera frame per pattern.
@@ -227,12 +242,31 @@ double monotonic_s() {
 
 class Calibrate {
  public:
-  enum class Mode { kCalibrate, kSelfCheck, kServe };
+  enum class Mode { kCalibrate, kSelfCheck, kServe, kScale };
 
   Calibrate(const Options& options, Mode mode) : options_(options), mode_(mode), module_("calibrate", options.lcm_url) {
-    if (mode_ != Mode::kCalibrate) {
+    if (mode_ == Mode::kServe) {
+      // An exhibit's launcher starts --serve before anyone has calibrated, or with a file being rewritten:
+      // it serves nothing until a good file is there, and never exits over it.
+      file_time_ = file_time();
+      try {
+        calibration_ = cal::load_calibration(options_.output);
+        log::info("loaded ", options_.output, " (reprojection error mean ", calibration_->reprojection_error_mean_px, " px)");
+      } catch (const std::exception& e) {
+        if (std::filesystem::exists(options_.output)) ++module_.counters().errors;
+        log::warn("no usable calibration yet (", e.what(), "): serving nothing until ", options_.output,
+                  " is written; run bricklayer-calibrate");
+        module_.set_status("no calibration yet: run bricklayer-calibrate");
+      }
+    } else if (mode_ != Mode::kCalibrate) {
       calibration_ = cal::load_calibration(options_.output);
       log::info("loaded ", options_.output, " (reprojection error mean ", calibration_->reprojection_error_mean_px, " px)");
+    }
+    if (mode_ == Mode::kScale) {
+      scale_ = std::make_unique<vision::BlockScaleMeter>(*calibration_);
+      scale_started_s_ = monotonic_s();
+      module_.set_status("measuring blocks on the bottom row");
+      log::info("measuring the board scale from blocks standing apart on the bottom row (", options_.scale_frames, " frames)");
     }
     module_.subscribe<projector_state_t>(channel(kProjectorChannel), [this](const projector_state_t& s) { HandleProjector(s); });
     module_.subscribe<image_t>(channel(kImageChannel), [this](const image_t& m) { HandleImage(m); });
@@ -255,9 +289,20 @@ class Calibrate {
  private:
   void HandleProjector(const projector_state_t& s) {
     if (capture_) capture_->on_projector_state(s);
+    // --scale-from-blocks with the game running: its red and blue light on the blocks leaks into green.
+    if (scale_ && s.image.size > 0) {
+      const cv::Mat shown = decode_frame(s.image);
+      if (shown.empty()) {
+        ++module_.counters().errors;
+        log::warn("projector image could not be decoded; measuring without its leakage subtracted");
+        return;
+      }
+      scale_->set_projector_image(shown, {calibration_->projector_width, calibration_->projector_height});
+    }
   }
   void HandleImage(const image_t& m) {
     if (capture_) capture_->on_frame(m);
+    if (scale_) measure_scale(m);
   }
   void HandleStack(const stack_t& s) {
     const bool empty = s.status == stack_t::STATUS_OK && s.num_blocks == 0;
@@ -266,6 +311,10 @@ class Calibrate {
   }
   void HandleCommand(const command_t& c) {
     if (c.command != command_t::SELF_CHECK || mode_ != Mode::kServe) return;
+    if (!calibration_) {
+      log::warn("SELF_CHECK ignored: no calibration to check yet (", options_.output, "); run bricklayer-calibrate");
+      return;
+    }
     if (capture_) {
       log::warn("SELF_CHECK ignored: a self-check is already running");
       return;
@@ -302,8 +351,20 @@ class Calibrate {
 
   void Tick() {
     const double now = monotonic_s();
-    if (mode_ == Mode::kServe && calibration_ && now - last_publish_s_ >= options_.republish_s) publish_calibration();
-    if (mode_ == Mode::kServe && !capture_ && options_.self_check_every_s > 0 && board_empty_ &&
+    if (mode_ == Mode::kServe && now - last_publish_s_ >= options_.republish_s) {
+      reload_if_changed();
+      publish_calibration();
+      last_publish_s_ = now;  // also when there is nothing to publish: the file is looked at once a period
+    }
+    if (scale_ && scale_frames_ == 0 && now - scale_started_s_ > 2 * options_.timeout_s) {
+      log::error("no camera frames on ", channel(kImageChannel), " within ", 2 * options_.timeout_s,
+                 " s: is the camera (bricklayer-camera or bricklayer-simcam) running?");
+      module_.set_status("no camera frames");
+      scale_.reset();
+      finish(kExitRejected);
+      return;
+    }
+    if (mode_ == Mode::kServe && calibration_ && !capture_ && options_.self_check_every_s > 0 && board_empty_ &&
         now - empty_since_s_ >= options_.empty_for_s && now - last_check_s_ >= options_.self_check_every_s) {
       log::info("automatic self-check (board empty for ", options_.empty_for_s, " s)");
       start_self_check();
@@ -383,6 +444,89 @@ class Calibrate {
     if (mode_ == Mode::kSelfCheck) finish(code);
   }
 
+  // --scale-from-blocks: one more frame measured; after --scale-frames, correct and save the board scale.
+  void measure_scale(const image_t& m) {
+    if (++scale_seen_ <= options_.skip_frames) return;
+    const cv::Mat bgr = decode_frame(m);
+    if (bgr.empty() || bgr.cols != calibration_->camera_width || bgr.rows != calibration_->camera_height) {
+      ++module_.counters().errors;
+      log::warn("camera frame ", m.frame_number, " could not be decoded or is not ", calibration_->camera_width, "x",
+                calibration_->camera_height, " (the calibration's camera size); skipped");
+      return;
+    }
+    const int blocks = scale_->add(bgr);
+    log::debug("frame ", m.frame_number, ": ", blocks, " lone bottom-row blocks measured");
+    if (++scale_frames_ < options_.scale_frames) return;
+
+    std::string why;
+    const std::optional<vision::BoardCorrection> fit =
+        scale_->result(2 * options_.scale_frames, options_.scale_max_residual, &why);
+    scale_.reset();
+    if (!fit) {
+      log::error("board scale not measured: ", why);
+      module_.set_status("scale not measured: " + why);
+      finish(kExitRejected);
+      return;
+    }
+    const double change = fit->max_change(kScaleCheckHalfWidth);
+    module_.set_value("block_length", fit->length_at(0.0));
+    module_.set_value("blocks_measured", fit->blocks);
+    module_.set_value("correction_max_change", change);
+    std::ostringstream text;
+    text.precision(4);
+    text << "blocks read " << fit->length_at(-2.0) << ", " << fit->length_at(0.0) << " and " << fit->length_at(2.0)
+         << " block lengths long 2 lengths left of the edge, at it and 2 right of it (" << fit->blocks
+         << " measurements, " << fit->outliers << " dropped, residual " << 100 * fit->residual
+         << "%); the correction moves points within " << kScaleCheckHalfWidth << " lengths of the edge by up to " << change;
+    if (change < options_.scale_min_change) {
+      log::info(text.str(), ": below --scale-min-change ", options_.scale_min_change, ", ", options_.output,
+                " left as it is");
+      module_.set_status("ok: scale already right");
+      finish(0);
+      return;
+    }
+    calibration_t corrected = vision::apply_board_correction(*calibration_, *fit);
+    corrected.utime = wall_utime();
+    try {
+      cal::save_calibration(options_.output, corrected);
+    } catch (const std::exception& e) {
+      log::error(e.what());
+      finish(kExitRejected);
+      return;
+    }
+    log::info(text.str(), ": board scale corrected, saved ", options_.output, "; publishing on ", channel(kCalibrationChannel));
+    calibration_ = corrected;
+    publish_calibration();
+    module_.set_status("ok");
+    finish(0);
+  }
+
+  std::filesystem::file_time_type file_time() const {
+    std::error_code ec;
+    const auto t = std::filesystem::last_write_time(options_.output, ec);
+    return ec ? std::filesystem::file_time_type{} : t;
+  }
+
+  // --serve: the file was rewritten (a new calibration or --scale-from-blocks): serve the new one. A file
+  // that no longer loads is a counted error and the previous calibration stays.
+  void reload_if_changed() {
+    const auto t = file_time();
+    if (t == file_time_) return;
+    file_time_ = t;
+    if (!std::filesystem::exists(options_.output)) {
+      log::warn(options_.output, " was removed; still serving the calibration read before");
+      return;
+    }
+    try {
+      calibration_ = cal::load_calibration(options_.output);
+      log::info("re-read ", options_.output, ": it changed");
+      module_.set_status("ok");
+    } catch (const std::exception& e) {
+      ++module_.counters().errors;
+      log::error("re-reading ", options_.output, ": ", e.what(), calibration_ ? "; still serving the previous calibration" : "");
+    }
+  }
+
   void finish(int code) {
     exit_code_ = code;
     module_.publish_heartbeat();  // the final status reaches the operator before exit
@@ -398,6 +542,11 @@ class Calibrate {
   double empty_since_s_ = 0;
   double last_check_s_ = -1e9;
   double last_publish_s_ = -1e9;
+  std::filesystem::file_time_type file_time_{};
+  std::unique_ptr<vision::BlockScaleMeter> scale_;
+  double scale_started_s_ = 0;
+  int scale_seen_ = 0;    // frames received in --scale-from-blocks
+  int scale_frames_ = 0;  // frames measured
   int exit_code_ = 0;
 };
 
@@ -422,6 +571,10 @@ int Main(int argc, char** argv) {
   flags.add("self-check-every", "0", "--serve: also self-check automatically this often, seconds, once the board has been empty --empty-for seconds (0 = only on command)");
   flags.add("empty-for", "5", "--serve: seconds of empty board before an automatic self-check");
   flags.add_bool("write-default", "write the uncalibrated default setup (common/board.h) to --output and exit");
+  flags.add_bool("scale-from-blocks", "correct the saved calibration's board scale from 3+ blocks standing apart on the bottom row, save, publish and exit");
+  flags.add("scale-frames", "10", "--scale-from-blocks: camera frames to measure");
+  flags.add("scale-max-residual", "0.01", "--scale-from-blocks: refuse when the block lengths disagree with the fitted correction by more than this fraction (RMS)");
+  flags.add("scale-min-change", "0.02", "--scale-from-blocks: leave the calibration as it is when the correction moves no point within 4 block lengths of the edge by more than this, block lengths");
   if (!flags.parse(argc, argv)) return 0;
   log::set_module("calibrate");
   log::set_level(log::parse_level(flags.get("log-level")));
@@ -450,7 +603,14 @@ int Main(int argc, char** argv) {
   if (options.self_check_every_s < 0) throw FlagError("--self-check-every must be 0 (off) or positive seconds");
   options.empty_for_s = flags.get_double("empty-for");
   if (options.empty_for_s < 0) throw FlagError("--empty-for must not be negative");
-  if (flags.get_bool("self-check") && flags.get_bool("serve")) throw FlagError("--self-check and --serve exclude each other");
+  options.scale_frames = static_cast<int>(flags.get_int("scale-frames"));
+  if (options.scale_frames < 1 || options.scale_frames > 1000) throw FlagError("--scale-frames must be 1..1000");
+  options.scale_max_residual = flags.get_double("scale-max-residual");
+  if (!(options.scale_max_residual > 0 && options.scale_max_residual < 1)) throw FlagError("--scale-max-residual must be in (0, 1)");
+  options.scale_min_change = flags.get_double("scale-min-change");
+  if (!(options.scale_min_change >= 0 && options.scale_min_change < 1)) throw FlagError("--scale-min-change must be in [0, 1) block lengths");
+  if (flags.get_bool("self-check") + flags.get_bool("serve") + flags.get_bool("scale-from-blocks") > 1)
+    throw FlagError("--self-check, --serve and --scale-from-blocks exclude each other");
 
   if (flags.get_bool("write-default")) {
     cal::save_calibration(options.output, cal::default_calibration());
@@ -458,9 +618,10 @@ int Main(int argc, char** argv) {
     return 0;
   }
 
-  const Calibrate::Mode mode = flags.get_bool("serve")        ? Calibrate::Mode::kServe
-                               : flags.get_bool("self-check") ? Calibrate::Mode::kSelfCheck
-                                                              : Calibrate::Mode::kCalibrate;
+  const Calibrate::Mode mode = flags.get_bool("serve")               ? Calibrate::Mode::kServe
+                               : flags.get_bool("self-check")        ? Calibrate::Mode::kSelfCheck
+                               : flags.get_bool("scale-from-blocks") ? Calibrate::Mode::kScale
+                                                                     : Calibrate::Mode::kCalibrate;
   Calibrate app(options, mode);
   return app.Run();
 }

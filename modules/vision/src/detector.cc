@@ -399,6 +399,8 @@ Detection Detector::detect(const cv::Mat& frame) {
     blk.x = (0.5 * (left + right) - 0.5 * length - g.edge_x_px) / length;
     const double contrast = p.depth / (2.0 * config_.min_depth);
     blk.confidence = std::clamp(std::min(1.0, contrast) * (1.0 - p.err / tol), 0.0, 1.0);
+    blk.left_line_px = p.left;
+    blk.right_line_px = p.right;
     place_block(blk, frame_);
     out.blocks.push_back(blk);
   }

@@ -47,6 +47,9 @@ struct DetectedBlock {
   std::array<double, 4> corner_u{};  // camera pixels: left-bottom, right-bottom, right-top, left-top
   std::array<double, 4> corner_v{};
   double confidence = 0.0;         // 0..1
+  // Centroids of the two end lines in the rectified frame, pixels (block_scale.h). Two touching blocks whose
+  // end lines merged into one dip share it: the same value ends one and starts the other.
+  double left_line_px = 0.0, right_line_px = 0.0;
 };
 
 // What make_publishable (publishable.h) changed so a stack is one prediction accepts.

@@ -1,0 +1,175 @@
+#include "bricklayer/vision/block_scale.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace bricklayer::vision {
+
+namespace {
+
+DetectorConfig widened(DetectorConfig config) {
+  // Pairs of a mis-scaled board are up to kMaxScaleError of a length off; accept them (with margin).
+  config.length_tolerance = std::max(config.length_tolerance, kMaxScaleError + 0.05);
+  return config;
+}
+
+double corrected(double x, double a, double c) { return a * x / (c * x + 1.0); }
+
+struct Fit {
+  double a = 1.0, c = 0.0, rss = 0.0;
+};
+
+// For a fixed keystone c every block gives a * d_i = target with d_i = u(right) - u(left), u = x / (c x + 1):
+// a is linear least squares; the residual is then minimised over c by golden-section search (it is
+// smooth and, over the small range searched, unimodal).
+Fit fit_scale(const std::vector<EndLines>& m, double target, double c) {
+  double sdd = 0, sd = 0;
+  for (const EndLines& e : m) {
+    const double d = corrected(e.right, 1.0, c) - corrected(e.left, 1.0, c);
+    sdd += d * d, sd += d;
+  }
+  Fit f;
+  f.c = c;
+  f.a = sdd > 0 ? target * sd / sdd : 1.0;
+  for (const EndLines& e : m) {
+    const double r = (corrected(e.right, f.a, c) - corrected(e.left, f.a, c)) / target - 1.0;
+    f.rss += r * r;
+  }
+  return f;
+}
+
+Fit fit(const std::vector<EndLines>& m, double target, bool keystone) {
+  if (!keystone) return fit_scale(m, target, 0.0);
+  const double g = (std::sqrt(5.0) - 1) / 2;
+  double lo = -kMaxKeystone, hi = kMaxKeystone;
+  Fit p = fit_scale(m, target, hi - g * (hi - lo)), q = fit_scale(m, target, lo + g * (hi - lo));
+  for (int i = 0; i < 60; ++i) {
+    if (p.rss <= q.rss) {
+      hi = q.c, q = p;
+      p = fit_scale(m, target, hi - g * (hi - lo));
+    } else {
+      lo = p.c, p = q;
+      q = fit_scale(m, target, lo + g * (hi - lo));
+    }
+  }
+  return p.rss <= q.rss ? p : q;
+}
+
+double span(const std::vector<EndLines>& m) {
+  double lo = 1e300, hi = -1e300;
+  for (const EndLines& e : m) lo = std::min(lo, 0.5 * (e.left + e.right)), hi = std::max(hi, 0.5 * (e.left + e.right));
+  return m.empty() ? 0.0 : hi - lo;
+}
+
+}  // namespace
+
+double BoardCorrection::length_at(double x) const {
+  // Inverse of x' = a x / (c x + 1) is x = x' / (a - c x'); a block from x' to x' + 1 read this long.
+  const double xp = corrected(x, scale, keystone);
+  return (xp + 1) / (scale - keystone * (xp + 1)) - xp / (scale - keystone * xp);
+}
+
+double BoardCorrection::max_change(double half_width) const {
+  double worst = 0;
+  for (double x = -half_width; x <= half_width; x += half_width / 50)
+    worst = std::max(worst, std::abs(corrected(x, scale, keystone) - x));
+  return worst;
+}
+
+std::optional<BoardCorrection> fit_board_correction(const std::vector<EndLines>& measured, double line_width,
+                                                    int min_blocks, double max_residual, std::string* why, bool allow_keystone) {
+  auto fail = [&](const std::string& text) -> std::optional<BoardCorrection> {
+    if (why) *why = text;
+    return std::nullopt;
+  };
+  const std::string place = "stand 3 or more blocks on the bottom row, apart from each other, spread along it, whole in the camera's view";
+  if (static_cast<int>(measured.size()) < std::max(1, min_blocks))
+    return fail("measured " + std::to_string(measured.size()) + " blocks, need " + std::to_string(min_blocks) + ": " + place);
+  const double target = 1.0 - line_width;
+  // Fit; while the worst measurement is more than 3% off the fit (a mispaired line next to a touching pair),
+  // drop it and fit again. One at a time: a gross outlier drags the first fit, so its neighbours may look
+  // off until it is gone.
+  std::vector<EndLines> m = measured;
+  const auto error = [&](const Fit& f, const EndLines& e) {
+    return std::abs((corrected(e.right, f.a, f.c) - corrected(e.left, f.a, f.c)) / target - 1.0);
+  };
+  Fit f = fit(m, target, allow_keystone && span(m) >= kMinSpanForKeystone);
+  while (!m.empty()) {
+    const auto worst = std::max_element(m.begin(), m.end(), [&](const EndLines& x, const EndLines& y) { return error(f, x) < error(f, y); });
+    if (error(f, *worst) <= 0.03 || 4 * (measured.size() - m.size() + 1) > measured.size()) break;
+    m.erase(worst);
+    f = fit(m, target, allow_keystone && span(m) >= kMinSpanForKeystone);
+  }
+  const int outliers = static_cast<int>(measured.size() - m.size());
+  if (static_cast<int>(m.size()) < std::max(1, min_blocks))
+    return fail("measured " + std::to_string(m.size()) + " blocks that agree, need " + std::to_string(min_blocks) + ": " + place);
+
+  BoardCorrection c;
+  c.scale = f.a;
+  c.keystone = f.c;
+  c.blocks = static_cast<int>(m.size());
+  c.outliers = outliers;
+  c.residual = std::sqrt(f.rss / static_cast<double>(m.size()));
+  char text[200];
+  if (c.residual > max_residual) {
+    std::snprintf(text, sizeof text, "block lengths disagree by %.1f%% RMS after the fit (at most %.1f%% allowed): ",
+                  100 * c.residual, 100 * max_residual);
+    return fail(text + place + "; is the camera steady?");
+  }
+  if (std::abs(1.0 / c.scale - 1.0) > kMaxScaleError) {
+    std::snprintf(text, sizeof text, "blocks read %.3f block lengths long, beyond what can be measured (1 +- %.2f): ",
+                  1.0 / c.scale, kMaxScaleError);
+    return fail(std::string(text) + "check the calibration's --board geometry");
+  }
+  return c;
+}
+
+BlockScaleMeter::BlockScaleMeter(const calibration_t& calibration, DetectorConfig config)
+    : line_width_(config.line_width), detector_(BoardGeometry{}, widened(config)) {
+  if (!(line_width_ >= 0.0 && line_width_ < 0.5)) throw std::invalid_argument("line width must be in [0, 0.5) block lengths");
+  detector_.set_calibration(calibration);
+}
+
+int BlockScaleMeter::add(const cv::Mat& frame) {
+  const Detection d = detector_.detect(frame);
+  if (d.status != Detection::kOk) return 0;
+  const BoardGeometry& g = detector_.frame().geometry();
+  // Only blocks standing apart are measured: where two blocks touch (or nearly), their end lines merge into
+  // one dip or two split ones whose centroids are not half a width inside each block. Judged from the
+  // lines themselves, not from the pairing's guess of which lines are shared, since that guess compares
+  // spacings with the scale being measured.
+  std::vector<double> ends;
+  for (const DetectedBlock& b : d.blocks)
+    if (b.row == 0) ends.insert(ends.end(), {b.left_line_px, b.right_line_px});
+  const double apart_px = kMinGap * g.block_length_px;
+  auto crowded = [&](double line) {
+    // Its own line is at distance 0; a block's two lines are never this close to each other.
+    return std::count_if(ends.begin(), ends.end(), [&](double e) { return std::abs(e - line) < apart_px; }) > 1;
+  };
+  int added = 0;
+  for (const DetectedBlock& b : d.blocks) {
+    if (b.row != 0 || !(b.right_line_px > b.left_line_px) || crowded(b.left_line_px) || crowded(b.right_line_px)) continue;
+    measured_.push_back({(b.left_line_px - g.edge_x_px) / g.block_length_px, (b.right_line_px - g.edge_x_px) / g.block_length_px});
+    ++added;
+  }
+  return added;
+}
+
+calibration_t apply_board_correction(const calibration_t& calibration, const BoardCorrection& correction) {
+  const double a = correction.scale, c = correction.keystone;
+  if (!(a > 0.0) || !std::isfinite(a) || !std::isfinite(c))
+    throw std::invalid_argument("apply_board_correction: scale must be positive and finite, keystone finite");
+  const double* h = calibration.camera_to_board;
+  calibration_t out = calibration;
+  // Board (X, Y, W) = H * camera; C = [a 0 0; 0 a 0; c 0 1] gives x' = a X / (c X + W) = a x / (c x + 1).
+  for (int j = 0; j < 3; ++j) {
+    out.camera_to_board[j] = a * h[j];
+    out.camera_to_board[3 + j] = a * h[3 + j];
+    out.camera_to_board[6 + j] = c * h[j] + h[6 + j];
+  }
+  return out;
+}
+
+}  // namespace bricklayer::vision
