@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <string>
@@ -24,6 +25,8 @@
 #include "bricklayer/calibration/calibration_file.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/module.h"
+#include "bricklayer/heartbeat_t.hpp"
+#include "bricklayer/image_t.hpp"
 #include "bricklayer/core/predict.h"
 #include "bricklayer/prediction_t.hpp"
 #include "bricklayer/simcam/render.h"
@@ -119,6 +122,65 @@ TEST_CASE("vision takes bricklayer-calibrate's calibration file and refuses a ma
   CHECK(out.find("bad.json") != std::string::npos);
   CHECK(out.find("\"blocks\"") == std::string::npos);
   fs::remove_all(dir);
+}
+
+TEST_CASE("with --require-calibration vision publishes nothing until a calibration arrives, and a republished one changes nothing") {
+  // What an exhibit's launcher runs: a restarted vision must not publish stacks measured in the wrong frame,
+  // and bricklayer-calibrate --serve republishing the same calibration every second must not reset it.
+  core::Stack stack;
+  stack.blocks = {{1, 0, -2.5}, {2, 0, -1.2}, {3, 1, -1.9}};
+  simcam::Renderer renderer;
+  std::vector<uint8_t> jpeg;
+  cv::imencode(".jpg", renderer.render(stack, simcam::Nuisance::level(1), nullptr, 3).bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90});
+  Module m("test", kUrl);
+  std::vector<bricklayer::stack_t> stacks;
+  std::string status;
+  m.subscribe<bricklayer::stack_t>(channel(kStackChannel), [&](const bricklayer::stack_t& s) { stacks.push_back(s); });
+  m.subscribe<heartbeat_t>(channel(kHeartbeatChannel), [&](const heartbeat_t& h) {
+    if (h.module == "vision") status = h.status;
+  });
+  pid_t vision = spawn({test::program("bricklayer-vision"), "--lcm-url", kUrl, "--require-calibration"});
+  int64_t frame = 0;
+  // Streams frames at ~30 Hz for `seconds`, calling each_frame after each.
+  auto stream = [&](double seconds, const std::function<void()>& each_frame) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < end) {
+      image_t img{};
+      img.utime = frame;
+      img.frame_number = frame++;
+      img.width = 640;
+      img.height = 480;
+      img.format = image_t::FORMAT_JPEG;
+      img.source = "test";
+      img.data = jpeg;
+      img.size = static_cast<int32_t>(jpeg.size());
+      m.publish(channel(kImageChannel), img);
+      if (each_frame) each_frame();
+      const auto next = std::chrono::steady_clock::now() + std::chrono::milliseconds(33);
+      while (std::chrono::steady_clock::now() < next) m.lcm().handleTimeout(5);
+    }
+  };
+  stream(2.0, nullptr);
+  CHECK(stacks.empty());
+  CHECK(status == "waiting for a calibration");
+
+  // The default calibration describes the default camera simcam renders.
+  const calibration_t calibration = calibration::default_calibration();
+  m.publish(channel(kCalibrationChannel), calibration);
+  stream(1.0, nullptr);
+  REQUIRE(!stacks.empty());
+  CHECK(stacks.back().num_blocks == 3);
+  const size_t before = stacks.size();
+  int republished = 0;
+  stream(1.5, [&] {
+    if (frame % 3 == 0) m.publish(channel(kCalibrationChannel), calibration), ++republished;
+  });
+  stop(vision);
+  CHECK(republished >= 10);
+  REQUIRE(stacks.size() > before + 20);
+  int short_stacks = 0;  // a reset temporal filter publishes fewer blocks until it confirms them again
+  for (size_t k = before; k < stacks.size(); ++k) short_stacks += stacks[k].num_blocks != 3;
+  CHECK(short_stacks == 0);
 }
 
 TEST_CASE("simcam -> vision -> prediction over LCM reproduces the verdicts of the true stacks") {

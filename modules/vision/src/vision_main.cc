@@ -6,7 +6,8 @@
 //             leakage into green is subtracted).
 // Publishes:  BL_STACK (stack_t, one per frame, carrying the frame's utime and frame_number;
 //             STATUS_NO_FRAME for a corrupt, empty, truncated or wrongly sized frame; never a stack
-//             bricklayer-prediction rejects: see publishable.h), BL_TIMING (timing_t, stage "detect"),
+//             bricklayer-prediction rejects: see publishable.h; none at all with --require-calibration
+//             until a calibration is loaded or arrives), BL_TIMING (timing_t, stage "detect"),
 //             BL_HEARTBEAT (counters; values: blocks, lines, rejected_wide, rejected_faint, and totals
 //             moved_total, dropped_overlap_total, dropped_border_total).
 // Offline:    --images DIR --json prints one bricklayer-predict input line per image (name order),
@@ -76,7 +77,7 @@ int run_offline(const std::string& dir, Detector& detector) {
 class Vision {
  public:
   Vision(const std::string& url, Detector detector, const TemporalFilterConfig& filter_config, bool filter,
-         std::unique_ptr<camera::FrameSource> source)
+         std::unique_ptr<camera::FrameSource> source, std::optional<calibration_t> calibration, bool require_calibration)
       : module_(kModuleName, url),
         detector_(std::move(detector)),
         filter_(filter_config),
@@ -84,8 +85,15 @@ class Vision {
         source_(std::move(source)),
         period_(std::chrono::microseconds(source_ ? static_cast<int64_t>(1e6 / source_->rate()) : 0)),
         frames_(module_.counters()),
+        calibration_(std::move(calibration)),
+        require_calibration_(require_calibration),
         stack_channel_(channel(kStackChannel)),
         timing_channel_(channel(kTimingChannel)) {
+    if (require_calibration_ && !calibration_) {
+      log::info("waiting for a calibration on ", channel(kCalibrationChannel),
+                " (bricklayer-calibrate --serve) before publishing stacks");
+      module_.set_status("waiting for a calibration");
+    }
     if (!source_) {
       module_.subscribe<image_t>(channel(kImageChannel), [this](const image_t& m) { HandleImage(m); },
                                  64 << 20, 8);
@@ -105,6 +113,9 @@ class Vision {
   void HandleImage(const image_t& image) { frames_.put({image, wall_utime()}); }
 
   void HandleCalibration(const calibration_t& calibration) {
+    // bricklayer-calibrate --serve republishes the same calibration every few seconds so that restarted
+    // modules catch up: the one in use is kept as it is (remap tables, temporal filter).
+    if (calibration_ && same(*calibration_, calibration)) return;
     // Both throw on a bad calibration (a counted error; the previous calibration stays in use).
     calibration::validate_calibration(calibration);
     detector_.set_calibration(calibration);
@@ -156,9 +167,19 @@ class Vision {
     Process(frame, item->image.utime, item->image.frame_number, item->received_utime, error, start);
   }
 
+  static bool same(const calibration_t& a, const calibration_t& b) {
+    const int size = a.getEncodedSize();
+    if (size != b.getEncodedSize()) return false;
+    std::vector<uint8_t> ea(static_cast<size_t>(size)), eb(static_cast<size_t>(size));
+    return a.encode(ea.data(), 0, size) == size && b.encode(eb.data(), 0, size) == size && ea == eb;
+  }
+
   void Process(const cv::Mat& frame, int64_t utime, int64_t frame_number, int64_t received_utime,
                const std::string& decode_error, std::chrono::steady_clock::time_point start) {
     ++frames_seen_;
+    // --require-calibration: stacks measured in the uncalibrated default frame would be wrong, so a
+    // restarted vision publishes nothing until bricklayer-calibrate --serve's next publication.
+    if (require_calibration_ && !calibration_) return;
     Detection d;
     if (frame.empty()) {
       d.status = Detection::kNoFrame;
@@ -223,6 +244,7 @@ class Vision {
   std::chrono::steady_clock::time_point next_frame_;
   Latest<Frame> frames_;
   std::optional<calibration_t> calibration_;
+  bool require_calibration_;
   int64_t frames_seen_ = 0;
   PublishCounts published_;
   std::string stack_channel_, timing_channel_;
@@ -234,6 +256,7 @@ int Main(int argc, char** argv) {
   flags.add("log-level", "info", "debug, info, warn or error");
   flags.add("board", "", "board geometry JSON {edge_x_px, surface_y_px, block_length_px, block_height_px} used until a calibration arrives (default: the shared default setup)");
   flags.add("calibration", "", "calibration file written by bricklayer-calibrate (calibration.json, loaded strictly) to start with");
+  flags.add_bool("require-calibration", "publish no stacks until a calibration is loaded (--calibration) or arrives on BL_CALIBRATION (the exhibit's profiles: bricklayer-calibrate --serve)");
   flags.add("camera", "", "read frames from this V4L2 camera (index or /dev/videoN) instead of BL_IMAGE");
   flags.add("video", "", "read frames from this video file instead of BL_IMAGE");
   flags.add("images", "", "read frames from the images in this folder (name order) instead of BL_IMAGE");
@@ -250,6 +273,7 @@ int Main(int argc, char** argv) {
   BoardGeometry geometry;
   if (!flags.get("board").empty()) geometry = load_board_geometry(flags.get("board"));
   Detector detector(geometry);
+  std::optional<calibration_t> calibration;
   if (!flags.get("calibration").empty()) {
     // The strict loader bricklayer-calibrate's files are checked with; its errors name the file and key.
     const calibration_t loaded = calibration::load_calibration(flags.get("calibration"));
@@ -258,6 +282,7 @@ int Main(int argc, char** argv) {
     } catch (const std::invalid_argument& e) {
       throw std::runtime_error("--calibration " + flags.get("calibration") + ": " + e.what());
     }
+    calibration = loaded;
   }
 
   const int sources = !flags.get("camera").empty() + !flags.get("video").empty() + !flags.get("images").empty();
@@ -297,7 +322,8 @@ int Main(int argc, char** argv) {
   const std::string url = resolve_lcm_url(flags.get("lcm-url"));
   check_lcm_url(url);
   Module::install_signal_handlers();
-  Vision vision(url, std::move(detector), filter_config, !flags.get_bool("no-filter"), std::move(source));
+  Vision vision(url, std::move(detector), filter_config, !flags.get_bool("no-filter"), std::move(source), calibration,
+                flags.get_bool("require-calibration"));
   return vision.Run();
 }
 
