@@ -87,3 +87,20 @@ TEST_CASE("Latest keeps only the newest input and counts what it replaced") {
   CHECK(c.dropped == 2);
   CHECK_FALSE(slot.take());
 }
+
+TEST_CASE("same_message compares what two messages encode to") {
+  bricklayer::stack_t a{};
+  a.block_length = 1;
+  a.block_height = 0.25;
+  a.num_blocks = 1;
+  a.blocks.resize(1);
+  a.blocks[0].x = -0.5;
+  bricklayer::stack_t b = a;
+  CHECK(same_message(a, b));
+  b.blocks[0].x = -0.4999;
+  CHECK_FALSE(same_message(a, b));
+  b = a;
+  b.num_blocks = 2;  // a different size
+  b.blocks.resize(2);
+  CHECK_FALSE(same_message(a, b));
+}

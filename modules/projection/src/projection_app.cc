@@ -203,7 +203,10 @@ void ProjectionApp::request_hint() {
 }
 
 void ProjectionApp::apply_inputs() {
-  if (auto c = calibration_in_.take()) {
+  // bricklayer-calibrate --serve republishes the calibration every second: an unchanged one is not applied
+  // (nor logged) again.
+  if (auto c = calibration_in_.take(); c && !(applied_calibration_ && same_message(*applied_calibration_, *c))) {
+    applied_calibration_ = *c;
     try {
       BoardToProjector mapping = BoardToProjector::from_calibration(*c);
       if (c->projector_width > 0 && c->projector_height > 0 &&

@@ -115,7 +115,7 @@ class Vision {
   void HandleCalibration(const calibration_t& calibration) {
     // bricklayer-calibrate --serve republishes the same calibration every few seconds so that restarted
     // modules catch up: the one in use is kept as it is (remap tables, temporal filter).
-    if (calibration_ && same(*calibration_, calibration)) return;
+    if (calibration_ && same_message(*calibration_, calibration)) return;
     // Both throw on a bad calibration (a counted error; the previous calibration stays in use).
     calibration::validate_calibration(calibration);
     detector_.set_calibration(calibration);
@@ -165,13 +165,6 @@ class Vision {
     const auto start = std::chrono::steady_clock::now();  // the stage's time includes decoding the frame
     const cv::Mat frame = decode_image(item->image, &error);
     Process(frame, item->image.utime, item->image.frame_number, item->received_utime, error, start);
-  }
-
-  static bool same(const calibration_t& a, const calibration_t& b) {
-    const int size = a.getEncodedSize();
-    if (size != b.getEncodedSize()) return false;
-    std::vector<uint8_t> ea(static_cast<size_t>(size)), eb(static_cast<size_t>(size));
-    return a.encode(ea.data(), 0, size) == size && b.encode(eb.data(), 0, size) == size && ea == eb;
   }
 
   void Process(const cv::Mat& frame, int64_t utime, int64_t frame_number, int64_t received_utime,

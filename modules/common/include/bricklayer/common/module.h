@@ -19,6 +19,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "bricklayer/common/log.h"
 
@@ -51,6 +52,16 @@ class Latest {
   Counters& counters_;
   std::optional<T> value_;
 };
+
+// Whether two LCM messages encode to the same bytes (e.g. a calibration republished unchanged, which a
+// module keeps using as it is instead of rebuilding its state).
+template <typename M>
+bool same_message(const M& a, const M& b) {
+  const int size = a.getEncodedSize();
+  if (size != b.getEncodedSize()) return false;
+  std::vector<uint8_t> ea(static_cast<size_t>(size)), eb(static_cast<size_t>(size));
+  return a.encode(ea.data(), 0, size) == size && b.encode(eb.data(), 0, size) == size && ea == eb;
+}
 
 // Microseconds since the epoch. For stamps and timing fields only, never inside a computation.
 int64_t wall_utime();

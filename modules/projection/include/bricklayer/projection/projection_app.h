@@ -114,6 +114,7 @@ class ProjectionApp {
   Latest<stack_t> stack_in_;
   Latest<prediction_t> prediction_in_;
   Latest<calibration_t> calibration_in_;
+  std::optional<calibration_t> applied_calibration_;  // the last one taken (applied or rejected)
   Latest<hint_t> hint_in_;
   Latest<collapse_preview_t> preview_in_;
   std::vector<command_t> commands_in_;  // every command counts: no newest-wins here
