@@ -44,6 +44,35 @@ TEST_CASE("every profile in launch/profiles parses") {
   CHECK(projection_has_both);
 }
 
+TEST_CASE("every shipped profile's programs exist, take the flags it gives them, and send the heartbeat it waits for") {
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(BRICKLAYER_SOURCE_DIR) + "/launch/profiles")) {
+    if (entry.path().extension() != ".json") continue;
+    const Profile p = load_profile(entry.path().string());
+    for (const ModuleSpec& m : p.modules) {
+      for (const auto* command : {&m.command, &m.command_with_display}) {
+        if (command->empty()) continue;
+        INFO(entry.path().filename().string() << ": module " << m.name << ": " << (*command)[0]);
+        const std::string program = std::string(BRICKLAYER_BINARY_DIR) + "/bin/" + (*command)[0];
+        REQUIRE(std::filesystem::exists(program));
+        // Every process is named after its program (bricklayer-X sends heartbeats as X).
+        CHECK("bricklayer-" + m.heartbeat == (*command)[0]);
+        std::string help;
+        FILE* out = popen((program + " --help 2>&1").c_str(), "r");
+        REQUIRE(out);
+        char buf[4096];
+        while (fgets(buf, sizeof buf, out)) help += buf;
+        pclose(out);
+        for (const std::string& arg : *command) {
+          if (arg.rfind("--", 0) != 0) continue;
+          const std::string flag = arg.substr(0, arg.find('='));
+          INFO(flag);
+          CHECK((help.find("  " + flag + "=") != std::string::npos || help.find("  " + flag + " ") != std::string::npos));
+        }
+      }
+    }
+  }
+}
+
 TEST_CASE("a profile's defaults") {
   Profile p = parse_profile(R"({"modules":[{"name":"prediction","command":["bricklayer-prediction"]}]})", "t");
   REQUIRE(p.modules.size() == 1);
