@@ -455,7 +455,7 @@ class Calibrate {
       return;
     }
     const int blocks = scale_->add(bgr);
-    log::debug("frame ", m.frame_number, ": ", blocks, " lone bottom-row blocks measured");
+    log::debug("frame ", m.frame_number, ": ", blocks, " bottom-row blocks standing apart measured");
     if (++scale_frames_ < options_.scale_frames) return;
 
     std::string why;
