@@ -26,7 +26,6 @@
 // camera frame received --skip-frames frames after the echo (frames already in flight show the
 // previous pattern). A step without echo or frame within --timeout seconds is sent once more, then
 // the run fails with a message naming what is missing.
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
@@ -53,6 +52,7 @@
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/stack_t.hpp"
 #include "bricklayer/vision/block_scale.h"
+#include "bricklayer/vision/frame.h"
 
 namespace bricklayer {
 namespace {
@@ -63,35 +63,14 @@ constexpr int kExitRejected = 1;
 constexpr int kExitDrift = 3;
 constexpr double kScaleCheckHalfWidth = 4.0;  // block lengths either side of the edge a correction is judged over
 
-// A camera frame as BGR, or empty when it cannot be decoded (counted as an error by the caller).
+// A camera (or projector) frame as BGR, or empty when it cannot be decoded (counted as an error by the
+// caller). Vision's decoder: it checks the sizes the message and the JPEG/PNG header declare before
+// decoding (a 300-byte PNG declaring 30000x30000 is refused, not a 2.7 GB allocation) and is fuzzed.
 cv::Mat decode_frame(const image_t& img) {
-  if (img.size != static_cast<int32_t>(img.data.size()) || img.width <= 0 || img.height <= 0 ||
-      img.width > 8192 || img.height > 8192) {
-    return {};
-  }
-  cv::Mat out;
-  const int64_t pixels = static_cast<int64_t>(img.width) * img.height;
-  switch (img.format) {
-    case image_t::FORMAT_JPEG:
-    case image_t::FORMAT_PNG:
-      try {
-        out = cv::imdecode(img.data, cv::IMREAD_COLOR);
-      } catch (const cv::Exception&) {
-        return {};
-      }
-      break;
-    case image_t::FORMAT_GRAY8:
-      if (static_cast<int64_t>(img.data.size()) != pixels) return {};
-      cv::cvtColor(cv::Mat(img.height, img.width, CV_8UC1, const_cast<uint8_t*>(img.data.data())), out, cv::COLOR_GRAY2BGR);
-      break;
-    case image_t::FORMAT_BGR8:
-      if (static_cast<int64_t>(img.data.size()) != 3 * pixels) return {};
-      out = cv::Mat(img.height, img.width, CV_8UC3, const_cast<uint8_t*>(img.data.data())).clone();
-      break;
-    default:
-      return {};
-  }
-  if (out.empty() || out.cols != img.width || out.rows != img.height || out.type() != CV_8UC3) return {};
+  std::string error;
+  cv::Mat out = vision::decode_image(img, &error);
+  if (!out.empty() && out.channels() == 1) cv::cvtColor(out, out, cv::COLOR_GRAY2BGR);
+  if (!error.empty()) log::debug(error);
   return out;
 }
 
