@@ -410,7 +410,7 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
     for (int i = 0; i < 9; ++i) CHECK(after.camera_to_projector[i] == before.camera_to_projector[i]);
   }
   {
-    // Measured again: right within --scale-min-correction, the file is left as it is.
+    // Measured again: a correction below --scale-min-change, the file is left as it is.
     const calibration_t corrected = cal::load_calibration(output);
     FakeRig rig(camera, projector);
     rig.set_scene(blocks);

@@ -79,7 +79,7 @@ double BoardCorrection::max_change(double half_width) const {
 }
 
 std::optional<BoardCorrection> fit_board_correction(const std::vector<EndLines>& measured, double line_width,
-                                                    int min_blocks, double max_residual, std::string* why, bool allow_keystone) {
+                                                    int min_blocks, double max_residual, std::string* why) {
   auto fail = [&](const std::string& text) -> std::optional<BoardCorrection> {
     if (why) *why = text;
     return std::nullopt;
@@ -95,12 +95,12 @@ std::optional<BoardCorrection> fit_board_correction(const std::vector<EndLines>&
   const auto error = [&](const Fit& f, const EndLines& e) {
     return std::abs((corrected(e.right, f.a, f.c) - corrected(e.left, f.a, f.c)) / target - 1.0);
   };
-  Fit f = fit(m, target, allow_keystone && span(m) >= kMinSpanForKeystone);
+  Fit f = fit(m, target, span(m) >= kMinSpanForKeystone);
   while (!m.empty()) {
     const auto worst = std::max_element(m.begin(), m.end(), [&](const EndLines& x, const EndLines& y) { return error(f, x) < error(f, y); });
     if (error(f, *worst) <= 0.03 || 4 * (measured.size() - m.size() + 1) > measured.size()) break;
     m.erase(worst);
-    f = fit(m, target, allow_keystone && span(m) >= kMinSpanForKeystone);
+    f = fit(m, target, span(m) >= kMinSpanForKeystone);
   }
   const int outliers = static_cast<int>(measured.size() - m.size());
   if (static_cast<int>(m.size()) < std::max(1, min_blocks))

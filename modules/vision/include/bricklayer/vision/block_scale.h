@@ -19,7 +19,7 @@
 // lengths are measured within 0.1% at the clean nuisance level, and read short by up to 0.25% with
 // mild/strong and 0.5% with harsh blur (blur mixes the block's edge into the line's dip and pulls its
 // centroid inward). Corrections smaller than that are not worth applying: bricklayer-calibrate
-// --scale-from-blocks applies only larger ones (--scale-min-correction).
+// --scale-from-blocks applies only larger ones (--scale-min-change).
 #pragma once
 
 #include <optional>
@@ -57,8 +57,7 @@ struct BoardCorrection {
 // Returns nothing with *why saying what to fix: fewer than min_blocks measurements, a residual above
 // max_residual, or a scale beyond kMaxScaleError.
 std::optional<BoardCorrection> fit_board_correction(const std::vector<EndLines>& measured, double line_width,
-                                                    int min_blocks, double max_residual, std::string* why,
-                                                    bool allow_keystone = true);
+                                                    int min_blocks, double max_residual, std::string* why);
 
 class BlockScaleMeter {
  public:
