@@ -11,6 +11,7 @@
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/hint_t.hpp"
 #include "bricklayer/image_t.hpp"
+#include "bricklayer/node_config_t.hpp"
 #include "bricklayer/prediction_t.hpp"
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/round_t.hpp"
@@ -32,7 +33,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1 || size > (1 << 20)) return 0;
   const uint8_t* body = data + 1;
   size_t n = size - 1;
-  switch (data[0] % 11) {
+  switch (data[0] % 12) {
     case 0: roundtrip<bricklayer::image_t>(body, n); break;
     case 1: roundtrip<bricklayer::stack_t>(body, n); break;
     case 2: roundtrip<bricklayer::prediction_t>(body, n); break;
@@ -44,6 +45,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     case 8: roundtrip<bricklayer::collapse_preview_t>(body, n); break;
     case 9: roundtrip<bricklayer::hint_t>(body, n); break;
     case 10: roundtrip<bricklayer::timing_t>(body, n); break;
+    case 11: roundtrip<bricklayer::node_config_t>(body, n); break;
   }
   return 0;
 }

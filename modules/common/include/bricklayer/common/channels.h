@@ -19,6 +19,7 @@ inline constexpr const char* kProjectorChannel = "BL_PROJECTOR";    // projector
 inline constexpr const char* kPreviewChannel = "BL_PREVIEW";        // collapse_preview_t, planner
 inline constexpr const char* kHintChannel = "BL_HINT";              // hint_t, planner
 inline constexpr const char* kTruthChannel = "BL_TRUTH";            // stack_t, simcam: the true stack of each frame
+inline constexpr const char* kConfigChannel = "BL_CONFIG";          // node_config_t, every node at start and every 10 s
 
 // The channel name with the deployment's prefix (environment BRICKLAYER_CHANNEL_PREFIX, default none).
 std::string channel(const char* name);
