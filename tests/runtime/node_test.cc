@@ -97,11 +97,10 @@ TEST_CASE("malformed, oversized and refused inputs are counted errors; the node 
   rig.publish("IN", stack_with(1, 50));            // the handler throws
   rig.publish_bytes("IN", std::vector<uint8_t>(17u << 20, 0));  // over the 16 MB default limit
   rig.step();
-  CHECK(echo.counters().errors >= 1);
-  rig.settle();
   rig.publish("IN", stack_with(2, 1));
   REQUIRE(rec.wait_for<stack_t>("ECHO", {}, 100ms));
-  CHECK(echo.counters().received == 1);
+  CHECK(echo.counters().received == 2);  // the 50-block stack decoded; its handler's failure is an error
+  CHECK(echo.counters().errors == 3);
 }
 
 TEST_CASE("a flood of bad messages is counted in full but warned about in a few lines") {
@@ -129,7 +128,7 @@ TEST_CASE("newest wins: inputs that pile up between two handles are dropped and 
   auto hb = rec.last_heartbeat("echo");
   REQUIRE(hb);
   CHECK(hb->dropped == 4);
-  CHECK(echo.counters().received == 1);
+  CHECK(echo.counters().received == 5);  // every one decoded; four were superseded
 }
 
 TEST_CASE("an input silent for longer than its watch turns the status into what is missing") {

@@ -4,8 +4,8 @@
 #include <stdexcept>
 
 #include "bricklayer/core/program.h"
-
-#include "bricklayer/block_prediction_t.hpp"
+#include "bricklayer/messages/prediction.h"
+#include "bricklayer/messages/stack.h"
 
 namespace bricklayer::prediction {
 namespace {
@@ -36,7 +36,7 @@ size_t max_stack_message_bytes(size_t max_blocks) {
 
 PredictionLogic::PredictionLogic(PredictionConfig config, Predictor predictor)
     : config_(std::move(config)), predictor_(std::move(predictor)) {
-  if (config_.max_blocks == 0) throw std::invalid_argument("--max-blocks must be at least 1");
+  if (config_.max_blocks < 1) throw std::invalid_argument("--max-blocks must be at least 1");
   options_.annotator = core::parse_annotator(config_.annotator);
   if (lp_backend_of(config_.solver) != config_.solver) {
     std::string known;
@@ -44,7 +44,7 @@ PredictionLogic::PredictionLogic(PredictionConfig config, Predictor predictor)
     throw std::invalid_argument("unknown solver \"" + config_.solver + "\" (expected " + known + ")");
   }
   options_.solver = config_.solver;
-  options_.limits.max_blocks = config_.max_blocks;
+  options_.limits.max_blocks = static_cast<size_t>(config_.max_blocks);
   if (!(config_.position_tolerance >= 0.0 && config_.position_tolerance <= core::kMaxPositionTolerance)) {
     throw std::invalid_argument("--position-tolerance must be in [0, " + std::to_string(core::kMaxPositionTolerance) +
                                 "] block lengths");
@@ -59,16 +59,6 @@ std::string lp_backend_of(const std::string& recorded_solver) {
   return std::find(names.begin(), names.end(), head) != names.end() ? head : "";
 }
 
-core::Stack to_core_stack(const stack_t& stack) {
-  core::Stack s;
-  s.block_length = stack.block_length;
-  s.block_height = stack.block_height;
-  s.table_edge = stack.table_edge;
-  s.blocks.reserve(stack.blocks.size());
-  for (const auto& b : stack.blocks) s.blocks.push_back(core::Block{b.id, b.row, b.x});
-  return s;
-}
-
 prediction_t PredictionLogic::answer(const stack_t& stack) const {
   if (stack.status != stack_t::STATUS_OK) {
     return empty_answer(stack, config_, prediction_t::STATUS_NO_STACK,
@@ -81,14 +71,14 @@ prediction_t PredictionLogic::answer(const stack_t& stack) const {
                         "num_blocks is " + std::to_string(stack.num_blocks) + " but the stack carries " +
                             std::to_string(stack.blocks.size()) + " blocks");
   }
-  if (stack.blocks.size() > config_.max_blocks) {
+  if (stack.blocks.size() > static_cast<size_t>(config_.max_blocks)) {
     return empty_answer(stack, config_, prediction_t::STATUS_INVALID_STACK,
                         "stack has " + std::to_string(stack.blocks.size()) + " blocks, more than --max-blocks=" +
                             std::to_string(config_.max_blocks));
   }
   core::Prediction verdict;
   try {
-    core::Stack s = to_core_stack(stack);
+    core::Stack s = messages::to_core_stack(stack);
     verdict = predictor_(s, options_);  // validates first (StackError)
   } catch (const core::StackError& e) {
     return empty_answer(stack, config_, prediction_t::STATUS_INVALID_STACK, e.what());
@@ -98,21 +88,7 @@ prediction_t PredictionLogic::answer(const stack_t& stack) const {
     return empty_answer(stack, config_, prediction_t::STATUS_SOLVER_ERROR, std::string("unexpected: ") + e.what());
   }
   prediction_t p = empty_answer(stack, config_, prediction_t::STATUS_OK, "");
-  p.balanced = verdict.balanced;
-  p.overhang = verdict.overhang;
-  p.score = verdict.score;
-  if (!verdict.annotator.empty()) p.annotator = verdict.annotator;
-  if (!verdict.solver.empty()) p.solver = verdict.solver;
-  p.blocks.reserve(verdict.blocks.size());
-  for (const auto& v : verdict.blocks) {
-    block_prediction_t b{};
-    b.id = v.id;
-    b.state = static_cast<int8_t>(v.state);
-    b.accel = v.accel;
-    b.alpha = v.alpha;
-    p.blocks.push_back(b);
-  }
-  p.num_blocks = static_cast<int32_t>(p.blocks.size());
+  messages::put_verdict(verdict, p);
   return p;
 }
 

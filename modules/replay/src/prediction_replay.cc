@@ -29,7 +29,7 @@ PredictionReplay::PredictionReplay(std::string annotator, std::string solver, si
   if (annotator_fixed_) config_.annotator = annotator;
   if (solver_fixed_) config_.solver = solver;
   if (tolerance_fixed_) config_.position_tolerance = *position_tolerance;
-  config_.max_blocks = max_blocks;
+  config_.max_blocks = static_cast<int>(max_blocks);
   prediction::PredictionLogic check(config_);  // reject a bad annotator now
 }
 
@@ -75,7 +75,7 @@ void PredictionReplay::observe_recorded(const std::string&, const Bytes& bytes) 
 std::optional<std::vector<Output>> PredictionReplay::feed(const std::string& ch, const Bytes& bytes) {
   if (!logic_) logic_.emplace(config_);
   // The same limits as the live process (Module::subscribe with max_stack_message_bytes).
-  if (bytes.size() > prediction::max_stack_message_bytes(config_.max_blocks)) return std::nullopt;
+  if (bytes.size() > prediction::max_stack_message_bytes(static_cast<size_t>(config_.max_blocks))) return std::nullopt;
   stack_t s{};
   if (s.decode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0) return std::nullopt;
   prediction_t p = logic_->answer(s);

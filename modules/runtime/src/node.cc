@@ -6,6 +6,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstdlib>
+#include <stdexcept>
 
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/log.h"
@@ -48,31 +49,64 @@ void Node::set_config(std::string program, std::string config_json) {
   config_json_ = std::move(config_json);
 }
 
-void Node::subscribe_raw(const std::string& channel, QueuePolicy policy, size_t max_bytes, RawHandler handler) {
+namespace {
+// The transport's queue for one subscription: inputs are decoded (and bad ones counted) as soon as the
+// step's wait ends, so this only has to hold one burst; a flood beyond it is counted as dropped.
+constexpr size_t kTransportQueue = 4096;
+}  // namespace
+
+void Node::subscribe_raw(const std::string& channel, QueuePolicy policy, size_t max_bytes, Decoder decoder) {
+  if (policy.capacity == 0) throw std::invalid_argument("a subscription queue needs a capacity of at least 1");
+  inboxes_.push_back(Inbox{channel, policy, {}, 0});
+  Inbox& inbox = inboxes_.back();
   const SubscriptionStats& stats = bus_.subscribe(
-      channel, policy, [this, max_bytes, handler = std::move(handler)](const Received& r) {
+      channel, QueuePolicy::keep(kTransportQueue), [this, &inbox, max_bytes, decoder = std::move(decoder)](const Received& r) {
         last_message_utime_[r.channel] = r.utime;
         if (r.size > max_bytes) {
           error("oversized messages on " + r.channel, "rejected a " + std::to_string(r.size) + "-byte message on " +
                                                           r.channel + " (limit " + std::to_string(max_bytes) + ")");
           return;
         }
-        // Nothing a handler does may escape into the bus (LCM's C callback, a test's loop).
+        std::function<void()> call;
         try {
-          if (!handler(r)) {
-            error("malformed messages on " + r.channel, "could not decode a " + std::to_string(r.size) +
-                                                            "-byte message on " + r.channel +
-                                                            " (malformed or another message type)");
-            return;
-          }
-          ++counters_.received;
+          call = decoder(r);
         } catch (const std::exception& e) {
-          error("failed handlers on " + r.channel, "handling a message on " + r.channel + " failed: " + e.what());
-        } catch (...) {
-          error("failed handlers on " + r.channel, "handling a message on " + r.channel + " failed");
+          error("malformed messages on " + r.channel, "decoding a message on " + r.channel + " failed: " + e.what());
+          return;
         }
+        if (!call) {
+          error("malformed messages on " + r.channel, "could not decode a " + std::to_string(r.size) + "-byte message on " +
+                                                          r.channel + " (malformed or another message type)");
+          return;
+        }
+        ++counters_.received;
+        if (inbox.queue.size() >= inbox.policy.capacity) {
+          inbox.queue.pop_front();
+          ++inbox.dropped;
+        }
+        inbox.queue.push_back(Pending{next_sequence_++, std::move(call)});
       });
   subscription_stats_.push_back(&stats);
+}
+
+void Node::deliver_pending() {
+  for (;;) {
+    Inbox* next = nullptr;
+    for (Inbox& in : inboxes_)
+      if (!in.queue.empty() && (!next || in.queue.front().sequence < next->queue.front().sequence)) next = &in;
+    if (!next) return;
+    const std::function<void()> call = std::move(next->queue.front().call);
+    const std::string& channel = next->channel;
+    next->queue.pop_front();
+    // Nothing a handler does may escape into the bus (LCM's C callback, a test's loop).
+    try {
+      call();
+    } catch (const std::exception& e) {
+      error("failed handlers on " + channel, "handling a message on " + channel + " failed: " + e.what());
+    } catch (...) {
+      error("failed handlers on " + channel, "handling a message on " + channel + " failed");
+    }
+  }
 }
 
 bool Node::publish_bytes(const std::string& channel, const std::vector<uint8_t>& bytes, bool output) {
@@ -125,6 +159,7 @@ std::string Node::status() const {
 int64_t Node::queue_drops() const {
   int64_t n = 0;
   for (const SubscriptionStats* s : subscription_stats_) n += s->dropped;
+  for (const Inbox& in : inboxes_) n += in.dropped;
   return n;
 }
 
@@ -182,6 +217,7 @@ bool Node::step(int timeout_ms) {
   // Round up, so that a timer due in 0.3 ms is not polled for in a busy loop of zero waits.
   const int rc = bus_.handle(static_cast<int>((wait_us + 999) / 1000));
   if (rc == Bus::kEnded) return false;
+  deliver_pending();
   if (now() >= wake_utime_) wake_utime_ = INT64_MAX;
   try {
     tick();

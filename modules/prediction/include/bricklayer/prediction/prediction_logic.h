@@ -8,7 +8,9 @@
 #include <string>
 
 #include "bricklayer/core/predict.h"
+#include "bricklayer/core/program.h"
 #include "bricklayer/prediction_t.hpp"
+#include "bricklayer/runtime/config.h"
 #include "bricklayer/stack_t.hpp"
 
 namespace bricklayer::prediction {
@@ -24,7 +26,19 @@ struct PredictionConfig {
   std::string annotator = "exact";  // exact, paper or balance (core::parse_annotator)
   std::string solver = "clp";       // LP backend passed to core::predict
   double position_tolerance = kMeasuredPositionTolerance;  // core::PredictOptions::position_tolerance
-  size_t max_blocks = 1000;         // larger stacks are answered with STATUS_INVALID_STACK
+  int max_blocks = 1000;            // larger stacks are answered with STATUS_INVALID_STACK
+
+  template <typename Visitor>
+  void visit(Visitor& v) {
+    v(runtime::param("annotator", annotator, "which blocks are red: exact (initial-acceleration causes), paper, balance")
+          .one_of({"exact", "paper", "balance"}));
+    v(runtime::param("solver", solver, "LP backend of the core").one_of(core::opt::solver_names()));
+    v(runtime::param("max-blocks", max_blocks, "larger stacks get STATUS_INVALID_STACK; larger messages are rejected")
+          .range(1, 100000));
+    v(runtime::param("position-tolerance", position_tolerance,
+                     "block lengths a measured position may be off; contact intervals are widened by this (0 = exact)")
+          .range(0, core::kMaxPositionTolerance));
+  }
 };
 
 // Upper bound of an encoded stack_t with max_blocks blocks: larger messages on BL_STACK are rejected
@@ -57,8 +71,5 @@ class PredictionLogic {
 // The LP backend named by a recorded prediction_t.solver ("clp", "clp+nnls", ...), or "" when it
 // names none this build knows.
 std::string lp_backend_of(const std::string& recorded_solver);
-
-// The core's own data model for a stack_t (no validation).
-core::Stack to_core_stack(const stack_t& stack);
 
 }  // namespace bricklayer::prediction

@@ -17,6 +17,8 @@
 
 #include <chrono>
 #include <cstdint>
+#include <deque>
+#include <list>
 #include <functional>
 #include <map>
 #include <optional>
@@ -33,9 +35,9 @@ namespace bricklayer::runtime {
 inline constexpr size_t kDefaultMaxMessageBytes = 16u << 20;
 
 struct NodeCounters {
-  int64_t received = 0;   // inputs decoded and handled
+  int64_t received = 0;   // inputs that decoded (a newer one may still supersede them: dropped)
   int64_t published = 0;  // outputs sent (reports such as timings and heartbeats are not counted)
-  int64_t dropped = 0;    // inputs skipped: pushed out of a full queue, or dropped by the node
+  int64_t dropped = 0;    // inputs skipped by the node itself (queue drops are added in the heartbeat)
   int64_t errors = 0;     // rejected inputs, failed computations, refused publications
 };
 
@@ -76,16 +78,17 @@ class Node {
   void set_config(std::string program, std::string config_json);
 
  protected:
-  // Decodes every message on channel as T and hands it to handler. Messages longer than max_bytes,
-  // that do not decode, or whose handler throws are counted errors (one rate-limited warning).
+  // Decodes every message on channel as T on arrival and hands it to handler, under policy. A message
+  // longer than max_bytes, that does not decode, or whose handler throws is a counted error (with a
+  // rate-limited warning); it never takes a good message's place in the queue, so garbage cannot push
+  // out a real input. Handlers run after the step's arrivals, in arrival order across subscriptions.
   template <typename T>
   void subscribe(const std::string& channel, QueuePolicy policy, std::function<void(const T&)> handler,
                  size_t max_bytes = kDefaultMaxMessageBytes) {
-    subscribe_raw(channel, policy, max_bytes, [handler = std::move(handler)](const Received& r) {
+    subscribe_raw(channel, policy, max_bytes, [handler = std::move(handler)](const Received& r) -> std::function<void()> {
       std::optional<T> msg = decode<T>(r.data, r.size);
-      if (!msg) return false;
-      handler(*msg);
-      return true;
+      if (!msg) return {};
+      return [handler, m = std::move(*msg)] { handler(m); };
     });
   }
 
@@ -130,12 +133,26 @@ class Node {
   std::string stale_inputs() const;
 
  private:
-  using RawHandler = std::function<bool(const Received&)>;
-  void subscribe_raw(const std::string& channel, QueuePolicy policy, size_t max_bytes, RawHandler handler);
+  // Decodes a message into the call that hands it over; an empty function when it does not decode.
+  using Decoder = std::function<std::function<void()>(const Received&)>;
+  void subscribe_raw(const std::string& channel, QueuePolicy policy, size_t max_bytes, Decoder decoder);
+  void deliver_pending();
   bool publish_bytes(const std::string& channel, const std::vector<uint8_t>& bytes, bool output);
   void publish_heartbeat();
   void publish_config();
   int64_t queue_drops() const;
+
+  // Decoded inputs waiting for their handlers, per subscription, under its policy.
+  struct Pending {
+    uint64_t sequence;
+    std::function<void()> call;
+  };
+  struct Inbox {
+    std::string channel;
+    QueuePolicy policy;
+    std::deque<Pending> queue;
+    int64_t dropped = 0;
+  };
 
   struct Watch {
     std::string channel;
@@ -146,7 +163,9 @@ class Node {
   std::string name_;
   Bus& bus_;
   NodeCounters counters_;
-  std::vector<const SubscriptionStats*> subscription_stats_;
+  std::vector<const SubscriptionStats*> subscription_stats_;  // the transport's queues (drops under a flood)
+  std::list<Inbox> inboxes_;                                   // stable addresses for the bus's handlers
+  uint64_t next_sequence_ = 0;
   std::map<std::string, int64_t> last_message_utime_;
   std::vector<Watch> watches_;
   std::map<std::string, double> values_;
