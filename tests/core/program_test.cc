@@ -179,3 +179,62 @@ TEST_CASE("a basis hint (good, singular or wrong-sized) never changes the answer
   bad.basis_hint = {0, 7};
   CHECK(make_solver("clp")->solve(bad).status == SolveStatus::kError);
 }
+
+TEST_CASE("clp: a warm start from the final basis re-solves without pivots; a changed problem from there gets the cold answer") {
+  const auto clp = make_solver("clp");
+  for (const Known& k : linear_programs()) {
+    if (k.status != SolveStatus::kOptimal) continue;
+    INFO(k.name);
+    Problem p = k.problem;
+    const SolveResult cold = clp->solve(p);
+    REQUIRE(cold.status == SolveStatus::kOptimal);
+    REQUIRE(cold.basis.variables.size() == static_cast<size_t>(p.num_variables()));
+    REQUIRE(cold.basis.rows.size() == static_cast<size_t>(p.num_rows()));
+    p.warm_start = cold.basis;
+    const SolveResult again = clp->solve(p);
+    REQUIRE(again.status == SolveStatus::kOptimal);
+    CHECK(again.iterations == 0);
+    for (size_t i = 0; i < cold.x.size(); ++i) CHECK(again.x[i] == Approx(cold.x[i]).margin(1e-12));
+  }
+  // The textbook corner with its second row loosened (6 -> 8): from the old basis, the new optimum.
+  Problem p = linear_programs()[0].problem;
+  const SolveResult first = clp->solve(p);
+  p.row_upper[1] = 8.0;
+  const SolveResult cold = clp->solve(p);
+  p.warm_start = first.basis;
+  const SolveResult warm = clp->solve(p);
+  REQUIRE(cold.status == SolveStatus::kOptimal);
+  REQUIRE(warm.status == SolveStatus::kOptimal);
+  CHECK(warm.objective == Approx(cold.objective).margin(1e-12));
+  CHECK(warm.x[0] == Approx(2.4).margin(1e-12));  // x + 2y = 4, 3x + y = 8
+  CHECK(warm.x[1] == Approx(0.8).margin(1e-12));
+  CHECK(warm.iterations <= cold.iterations);
+}
+
+TEST_CASE("a warm-start basis of the wrong shape is a malformed problem; a backend without bases ignores one") {
+  Problem p = linear_programs()[0].problem;
+  p.warm_start.variables = {BasisStatus::kBasic};
+  p.warm_start.rows = {BasisStatus::kBasic, BasisStatus::kBasic};
+  for (const auto& name : solver_names()) {
+    const SolveResult r = make_solver(name)->solve(p);
+    CHECK(r.status == SolveStatus::kError);
+    CHECK(r.message.find("warm-start basis") != std::string::npos);
+  }
+  p.warm_start.variables = {BasisStatus::kBasic, BasisStatus::kAtLower};
+  const SolveResult nlopt = make_solver("nlopt")->solve(p);
+  REQUIRE(nlopt.status == SolveStatus::kOptimal);
+  CHECK(nlopt.objective == Approx(-2.8).margin(1e-6));
+  CHECK(nlopt.basis.empty());
+}
+
+TEST_CASE("clp without scaling gives the same answers on the shared problems") {
+  SolverOptions options;
+  options.scale = false;
+  for (const Known& k : linear_programs()) {
+    INFO(k.name);
+    const SolveResult r = make_solver("clp")->solve(k.problem, options);
+    REQUIRE(r.status == k.status);
+    if (k.status != SolveStatus::kOptimal) continue;
+    for (size_t i = 0; i < k.x.size(); ++i) CHECK(r.x[i] == Approx(k.x[i]).margin(1e-9));
+  }
+}

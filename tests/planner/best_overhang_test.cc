@@ -4,7 +4,9 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <limits>
 #include <random>
 
@@ -137,4 +139,27 @@ TEST_CASE("every shipped stack is balanced by the exact annotator and reaches it
     CHECK(p.overhang == Approx(table[std::to_string(n)].get<double>()).margin(1e-6));
     CHECK(entry.at("residual").get<double>() < 1e-9);
   }
+}
+
+TEST_CASE("the planner's linear programs go through the core's solver adapter, not a solver library") {
+  // One problem description and one status vocabulary for every LP of the project: no planner source talks
+  // to CLP (or another solver) directly.
+  const std::filesystem::path root = std::filesystem::path(BRICKLAYER_SOURCE_DIR) / "modules/planner";
+  int files = 0;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
+    const std::string ext = entry.path().extension().string();
+    if (ext != ".cc" && ext != ".h" && entry.path().filename() != "CMakeLists.txt") continue;
+    std::ifstream in(entry.path());
+    std::stringstream text;
+    text << in.rdbuf();
+    INFO(entry.path().string());
+    for (const char* direct : {"ClpSimplex", "CoinPackedMatrix", "PkgConfig::CLP", "glpk.h", "nlopt.hpp"})
+      CHECK(text.str().find(direct) == std::string::npos);
+    ++files;
+  }
+  CHECK(files >= 8);
+  std::ifstream optimiser(root / "src/best_overhang.cc");
+  std::stringstream text;
+  text << optimiser.rdbuf();
+  CHECK(text.str().find("bricklayer/core/program.h") != std::string::npos);
 }

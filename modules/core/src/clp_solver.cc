@@ -14,6 +14,30 @@ double to_clp(double bound) {
   return bound;
 }
 
+ClpSimplex::Status to_clp(BasisStatus status) {
+  switch (status) {
+    case BasisStatus::kBasic: return ClpSimplex::basic;
+    case BasisStatus::kAtLower: return ClpSimplex::atLowerBound;
+    case BasisStatus::kAtUpper: return ClpSimplex::atUpperBound;
+    case BasisStatus::kFree: return ClpSimplex::isFree;
+    case BasisStatus::kSuperbasic: return ClpSimplex::superBasic;
+    case BasisStatus::kFixed: return ClpSimplex::isFixed;
+  }
+  return ClpSimplex::superBasic;
+}
+
+BasisStatus from_clp(ClpSimplex::Status status) {
+  switch (status) {
+    case ClpSimplex::basic: return BasisStatus::kBasic;
+    case ClpSimplex::atLowerBound: return BasisStatus::kAtLower;
+    case ClpSimplex::atUpperBound: return BasisStatus::kAtUpper;
+    case ClpSimplex::isFree: return BasisStatus::kFree;
+    case ClpSimplex::superBasic: return BasisStatus::kSuperbasic;
+    case ClpSimplex::isFixed: return BasisStatus::kFixed;
+  }
+  return BasisStatus::kSuperbasic;
+}
+
 class ClpSolver final : public Solver {
  public:
   std::string name() const override { return "clp"; }
@@ -44,9 +68,15 @@ class ClpSolver final : public Solver {
 
     ClpSimplex model;
     model.setLogLevel(0);
+    if (!options.scale) model.scaling(0);
     model.loadProblem(n, m, starts.data(), rows.data(), values.data(), lo.data(), hi.data(), problem.cost.data(),
                       rlo.data(), rhi.data());
-    if (static_cast<int>(problem.basis_hint.size()) == m && m > 0) {
+    const bool warm = !problem.warm_start.empty();
+    if (warm) {
+      model.createStatus();
+      for (int i = 0; i < n; ++i) model.setColumnStatus(i, to_clp(problem.warm_start.variables[i]));
+      for (int r = 0; r < m; ++r) model.setRowStatus(r, to_clp(problem.warm_start.rows[r]));
+    } else if (static_cast<int>(problem.basis_hint.size()) == m && m > 0) {
       model.createStatus();
       for (int i = 0; i < n; ++i) {
         if (std::isfinite(problem.lower[i])) {
@@ -61,9 +91,9 @@ class ClpSolver final : public Solver {
       for (int v : problem.basis_hint) model.setColumnStatus(v, ClpSimplex::basic);
     }
     model.setPrimalTolerance(options.feasibility_tolerance);
-    model.setDualTolerance(1e-9);
+    model.setDualTolerance(options.optimality_tolerance);
     if (options.max_iterations > 0) model.setMaximumIterations(options.max_iterations);
-    const bool hinted = static_cast<int>(problem.basis_hint.size()) == m && m > 0;
+    const bool hinted = !warm && static_cast<int>(problem.basis_hint.size()) == m && m > 0;
     if (hinted && problem.hint_primal_feasible) {
       model.primal();
     } else {
@@ -72,6 +102,7 @@ class ClpSolver final : public Solver {
 
     SolveResult result;
     result.native_status = model.status();
+    result.iterations = model.numberIterations();
     switch (model.status()) {
       case 0: result.status = SolveStatus::kOptimal; break;
       case 1: result.status = SolveStatus::kInfeasible; result.message = "clp: primal infeasible"; break;
@@ -79,6 +110,10 @@ class ClpSolver final : public Solver {
       case 3: result.status = SolveStatus::kLimitReached; result.message = "clp: iteration or time limit"; break;
       default: result.status = SolveStatus::kError; result.message = "clp: stopped with status " + std::to_string(model.status()); break;
     }
+    result.basis.variables.resize(static_cast<size_t>(n));
+    result.basis.rows.resize(static_cast<size_t>(m));
+    for (int i = 0; i < n; ++i) result.basis.variables[i] = from_clp(model.getColumnStatus(i));
+    for (int r = 0; r < m; ++r) result.basis.rows[r] = from_clp(model.getRowStatus(r));
     if (result.status == SolveStatus::kOptimal) {
       const double* x = model.primalColumnSolution();
       result.x.assign(x, x + n);

@@ -57,6 +57,12 @@ std::string Problem::check() const {
       return out.str();
     }
   }
+  if (!warm_start.empty() && (static_cast<int>(warm_start.variables.size()) != n ||
+                              static_cast<int>(warm_start.rows.size()) != num_rows())) {
+    out << "warm-start basis has " << warm_start.variables.size() << " variables and " << warm_start.rows.size()
+        << " rows, the problem " << n << " and " << num_rows();
+    return out.str();
+  }
   for (int v : basis_hint) {
     if (v < 0 || v >= n) {
       out << "basis hint variable " << v << " out of range";

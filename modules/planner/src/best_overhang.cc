@@ -1,14 +1,14 @@
 #include "bricklayer/planner/best_overhang.h"
 
-#include <ClpSimplex.hpp>
-#include <CoinPackedMatrix.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <random>
 #include <set>
 #include <stdexcept>
+
+#include "bricklayer/core/program.h"
 
 namespace bricklayer::planner {
 namespace {
@@ -21,7 +21,7 @@ struct Contact {
 };
 
 // The problem for one layout: variables v = [x_0..x_{n-1}, f_0, m_0, f_1, m_1, ...].
-struct Problem {
+struct LayoutProblem {
   std::vector<int> rows;
   std::vector<Contact> contacts;
   std::vector<std::pair<int, int>> same_row;  // (left, right) neighbours in one row: x_right - x_left >= 1
@@ -59,7 +59,7 @@ struct Bilinear {
   int kind;
 };
 
-std::vector<Bilinear> bilinear_constraints(const Problem& p) {
+std::vector<Bilinear> bilinear_constraints(const LayoutProblem& p) {
   std::vector<Bilinear> out;
   for (size_t c = 0; c < p.contacts.size(); ++c) {
     for (int b : {p.contacts[c].upper, p.contacts[c].lower})
@@ -76,7 +76,7 @@ std::vector<Bilinear> bilinear_constraints(const Problem& p) {
   return out;
 }
 
-double violation(const Problem& p, const Bilinear& g, const std::vector<double>& v) {
+double violation(const LayoutProblem& p, const Bilinear& g, const std::vector<double>& v) {
   const double f = v[p.f_index(g.contact)], m = v[p.m_index(g.contact)];
   if (g.kind == 2) return m;  // on the surface: m - f * 0 <= 0, linear, but kept elastic like the others
   const double x = v[g.block];
@@ -89,7 +89,7 @@ double violation(const Problem& p, const Bilinear& g, const std::vector<double>&
 }
 
 // Force and moment (about x = 0) balance of every block: [force_0, moment_0, force_1, ...], zero in equilibrium.
-std::vector<double> equilibrium_errors(const Problem& p, const std::vector<double>& v) {
+std::vector<double> equilibrium_errors(const LayoutProblem& p, const std::vector<double>& v) {
   const int n = p.n();
   std::vector<double> e(2 * n);
   for (int i = 0; i < n; ++i) {
@@ -109,7 +109,7 @@ std::vector<double> equilibrium_errors(const Problem& p, const std::vector<doubl
 }
 
 // Largest violation of any constraint (equalities, bilinear and linear inequalities, bounds) at v.
-double residual(const Problem& p, const std::vector<Bilinear>& bilinear, const std::vector<double>& v,
+double residual(const LayoutProblem& p, const std::vector<Bilinear>& bilinear, const std::vector<double>& v,
                 const std::vector<double>& lower, const std::vector<double>& upper) {
   double r = 0.0;
   for (double e : equilibrium_errors(p, v)) r = std::max(r, std::abs(e));
@@ -132,15 +132,26 @@ double residual(const Problem& p, const std::vector<Bilinear>& bilinear, const s
 // ended most 30-block runs above a 1e-9 residual).
 class SequentialLp {
  public:
-  SequentialLp(const Problem& p, std::vector<double> lower, std::vector<double> upper)
-      : p_(p), bilinear_(bilinear_constraints(p)), lower_(std::move(lower)), upper_(std::move(upper)) {
-    model_.setLogLevel(0);
+  SequentialLp(const LayoutProblem& p, std::vector<double> lower, std::vector<double> upper)
+      : p_(p), bilinear_(bilinear_constraints(p)), lower_(std::move(lower)), upper_(std::move(upper)),
+        solver_(core::opt::make_solver("clp")) {
+    if (!solver_->available())
+      throw std::runtime_error("optimise_layout needs the core's clp backend, which was not compiled in "
+                               "(install coinor-libclp-dev and configure with -DBRICKLAYER_WITH_CLP=ON)");
+    // CLP's own default tolerances (what the optimiser used before it went through the adapter; every answer's
+    // residual is measured anyway). No scaling: every coefficient is between 1e-4 and a few times n, and
+    // CLP's rescaling plus the clean-up it needed made each program about a third slower (README).
+    options_.feasibility_tolerance = 1e-7;
+    options_.optimality_tolerance = 1e-7;
+    options_.scale = false;
   }
 
   struct Outcome {
     std::vector<double> v;
     double residual = 0.0;
     int iterations = 0;
+    int linear_programs = 0;
+    int failed_programs = 0;
   };
 
   Outcome run(std::vector<double> v, int max_iterations) {
@@ -192,7 +203,7 @@ class SequentialLp {
         delta *= 0.25;
       }
     }
-    return {v, residual(p_, bilinear_, v, lower_, upper_), it};
+    return {v, residual(p_, bilinear_, v, lower_, upper_), it, linear_programs_, failed_programs_};
   }
 
  private:
@@ -214,114 +225,99 @@ class SequentialLp {
   }
 
   // The linear program at v; next = its solution, model_value = x_target - mu * sum of slacks there.
+  // Every program of one run has the same shape (variables, slacks, rows), so each starts from the last
+  // optimal basis.
   bool solve(const std::vector<double>& v, double delta, double mu, std::vector<double>& next, double& model_value) {
+    using core::opt::kInfinity;
     const int n = p_.n();
     const int nv = p_.num_vars();
     const int ns = static_cast<int>(bilinear_.size());
-    const int cols = nv + ns;
-    std::vector<double> col_lo(cols), col_hi(cols), cost(cols, 0.0);
-    for (int i = 0; i < nv; ++i) {
-      col_lo[i] = lower_[i];
-      col_hi[i] = upper_[i];
-    }
+    core::opt::Problem& lp = lp_;
+    lp.lower.assign(lower_.begin(), lower_.end());
+    lp.upper.assign(upper_.begin(), upper_.end());
+    lp.cost.assign(static_cast<size_t>(nv), 0.0);
     for (int i = 0; i < n; ++i) {
-      col_lo[i] = std::max(lower_[i], v[i] - delta);
-      col_hi[i] = std::min(upper_[i], v[i] + delta);
+      lp.lower[i] = std::max(lower_[i], v[i] - delta);
+      lp.upper[i] = std::min(upper_[i], v[i] + delta);
     }
-    for (int k = 0; k < ns; ++k) {
-      col_lo[nv + k] = 0.0;
-      col_hi[nv + k] = COIN_DBL_MAX;
-      cost[nv + k] = mu;
-    }
-    cost[p_.target] = -1.0;
-    // Rows, column-wise triplets.
-    std::vector<int> r_idx, c_idx;
-    std::vector<double> val, row_lo, row_hi;
-    auto add = [&](int row, int col, double value) {
-      r_idx.push_back(row);
-      c_idx.push_back(col);
-      val.push_back(value);
-    };
-    int row = 0;
+    for (int k = 0; k < ns; ++k) lp.add_variable(0.0, kInfinity, mu);  // slack of bilinear constraint k
+    lp.cost[p_.target] = -1.0;
+    lp.row_lower.clear();
+    lp.row_upper.clear();
+    lp.a.clear();
     for (int i = 0; i < n; ++i) {  // force and moment equilibrium of block i
+      const int force = lp.add_row(1.0, 1.0), moment = lp.add_row(0.5, 0.5);
       for (size_t c = 0; c < p_.contacts.size(); ++c) {
         const Contact& k = p_.contacts[c];
         const double sign = k.upper == i ? 1.0 : (k.lower == i ? -1.0 : 0.0);
         if (sign == 0.0) continue;
-        add(row, p_.f_index(c), sign);
-        add(row + 1, p_.m_index(c), sign);
+        lp.set(force, p_.f_index(c), sign);
+        lp.set(moment, p_.m_index(c), sign);
       }
-      add(row + 1, i, -1.0);
-      row_lo.insert(row_lo.end(), {1.0, 0.5});
-      row_hi.insert(row_hi.end(), {1.0, 0.5});
-      row += 2;
+      lp.set(moment, i, -1.0);
     }
-    for (int k = 0; k < ns; ++k) {
+    for (int k = 0; k < ns; ++k) {  // each linearised bilinear constraint, <= its bound with slack s_k
       const Bilinear& g = bilinear_[k];
       const int fi = p_.f_index(g.contact), mi = p_.m_index(g.contact);
+      int row = 0;
       if (g.kind == 2) {  // m - s <= 0
-        add(row, mi, 1.0);
-        row_hi.push_back(0.0);
+        row = lp.add_row(-kInfinity, 0.0);
+        lp.set(row, mi, 1.0);
       } else if (g.kind == 5) {  // f0 x + (x0 + o) f - s <= f0 x0
         const double f0 = v[fi], x0 = v[g.block];
-        add(row, g.block, f0);
-        add(row, fi, x0 + kMinOverlap);
-        row_hi.push_back(f0 * x0);
+        row = lp.add_row(-kInfinity, f0 * x0);
+        lp.set(row, g.block, f0);
+        lp.set(row, fi, x0 + kMinOverlap);
       } else if (g.kind == 3 || g.kind == 4) {  // d = +-(x_u - x_l): f0 d + (d0 - 1 + o) f - s <= f0 d0
         const double sign = g.kind == 3 ? 1.0 : -1.0;
         const int u = p_.contacts[g.contact].upper, l = p_.contacts[g.contact].lower;
         const double f0 = v[fi], d0 = sign * (v[u] - v[l]);
-        add(row, u, sign * f0);
-        add(row, l, -sign * f0);
-        add(row, fi, d0 - 1.0 + kMinOverlap);
-        row_hi.push_back(f0 * d0);
+        row = lp.add_row(-kInfinity, f0 * d0);
+        lp.set(row, u, sign * f0);
+        lp.set(row, l, -sign * f0);
+        lp.set(row, fi, d0 - 1.0 + kMinOverlap);
       } else if (g.kind == 0) {  // f0 x + x0 f - m - s <= f0 x0
         const double f0 = v[fi], x0 = v[g.block];
-        add(row, g.block, f0);
-        add(row, fi, x0);
-        add(row, mi, -1.0);
-        row_hi.push_back(f0 * x0);
+        row = lp.add_row(-kInfinity, f0 * x0);
+        lp.set(row, g.block, f0);
+        lp.set(row, fi, x0);
+        lp.set(row, mi, -1.0);
       } else {  // m - f0 x - (x0 + 1) f - s <= -f0 x0
         const double f0 = v[fi], x0 = v[g.block];
-        add(row, g.block, -f0);
-        add(row, fi, -(x0 + 1.0));
-        add(row, mi, 1.0);
-        row_hi.push_back(-f0 * x0);
+        row = lp.add_row(-kInfinity, -f0 * x0);
+        lp.set(row, g.block, -f0);
+        lp.set(row, fi, -(x0 + 1.0));
+        lp.set(row, mi, 1.0);
       }
-      add(row, nv + k, -1.0);
-      row_lo.push_back(-COIN_DBL_MAX);
-      ++row;
+      lp.set(row, nv + k, -1.0);
     }
-    for (const auto& [left, right] : p_.same_row) {
-      add(row, left, 1.0);
-      add(row, right, -1.0);
-      row_lo.push_back(-COIN_DBL_MAX);
-      row_hi.push_back(-1.0);
-      ++row;
+    for (const auto& [left, right] : p_.same_row) {  // x_left + 1 <= x_right
+      const int row = lp.add_row(-kInfinity, -1.0);
+      lp.set(row, left, 1.0);
+      lp.set(row, right, -1.0);
     }
-    CoinPackedMatrix matrix(true, r_idx.data(), c_idx.data(), val.data(), static_cast<CoinBigIndex>(val.size()));
-    matrix.setDimensions(row, cols);
-    model_.loadProblem(matrix, col_lo.data(), col_hi.data(), cost.data(), row_lo.data(), row_hi.data());
-    if (!status_.empty()) model_.copyinStatus(status_.data());  // warm start: same shape every step
-    model_.dual();
-    if (model_.status() != 0) {
-      status_.clear();
+    core::opt::SolveResult result = solver_->solve(lp, options_);
+    ++linear_programs_;
+    if (result.status != core::opt::SolveStatus::kOptimal) {
+      ++failed_programs_;
+      lp.warm_start = {};  // start the next one afresh
       return false;
     }
-    status_.assign(model_.statusArray(), model_.statusArray() + cols + row);
-    const double* z = model_.primalColumnSolution();
-    next.assign(z, z + nv);
+    lp.warm_start = std::move(result.basis);
+    next.assign(result.x.begin(), result.x.begin() + nv);
     double slack = 0.0;
-    for (int k = 0; k < ns; ++k) slack += z[nv + k];
+    for (int k = 0; k < ns; ++k) slack += result.x[nv + k];
     model_value = next[p_.target] - mu * slack;
     return true;
   }
 
-  const Problem& p_;
+  const LayoutProblem& p_;
   std::vector<Bilinear> bilinear_;
   std::vector<double> lower_, upper_;
-  ClpSimplex model_;
-  std::vector<unsigned char> status_;
+  std::unique_ptr<core::opt::Solver> solver_;
+  core::opt::SolverOptions options_;
+  core::opt::Problem lp_;  // the last linear program; its warm_start is the last optimal basis
+  int linear_programs_ = 0, failed_programs_ = 0;
 };
 
 std::vector<PlacedBlock> sorted_blocks(std::vector<PlacedBlock> blocks) {
@@ -341,7 +337,8 @@ int rightmost(const std::vector<PlacedBlock>& blocks) {
 }  // namespace
 
 std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& start_unsorted, int target,
-                                             double tolerance) {
+                                             double tolerance, OptimiseStats* stats) {
+  if (stats) *stats = {};
   if (start_unsorted.empty()) return std::nullopt;
   if (target < 0 || target >= static_cast<int>(start_unsorted.size()))
     throw std::invalid_argument("optimise_layout: target " + std::to_string(target) + " out of range");
@@ -356,7 +353,7 @@ std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& sta
     return pa.row != pb.row ? pa.row < pb.row : pa.x < pb.x;
   });
   std::vector<PlacedBlock> start;
-  Problem problem;
+  LayoutProblem problem;
   for (size_t i = 0; i < order.size(); ++i) {
     start.push_back(start_unsorted[order[i]]);
     if (order[i] == target) problem.target = static_cast<int>(i);
@@ -431,6 +428,7 @@ std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& sta
 
   SequentialLp slp(problem, lower, upper);
   const SequentialLp::Outcome result = slp.run(v, 400);
+  if (stats) *stats = {result.iterations, result.linear_programs, result.failed_programs};
   if (!(result.residual <= tolerance)) return std::nullopt;
 
   OverhangStack out;

@@ -8,6 +8,7 @@
 // native result codes onto the one SolveStatus vocabulary and keeps the native code on the side.
 #pragma once
 
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <string>
@@ -19,6 +20,17 @@ inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 enum class SolveStatus { kOptimal, kInfeasible, kUnbounded, kLimitReached, kError };
 std::string to_string(SolveStatus status);
+
+// A simplex basis: where each variable and each row (its activity) stands. Backends without a basis (NLopt)
+// ignore it and report none. Passing a solver's final basis back with a problem of the same shape (a
+// sequence of related linear programs, as in sequential linear programming) lets it start from there.
+enum class BasisStatus : uint8_t { kBasic, kAtLower, kAtUpper, kFree, kSuperbasic, kFixed };
+
+struct Basis {
+  std::vector<BasisStatus> variables;  // one per variable
+  std::vector<BasisStatus> rows;       // one per row
+  bool empty() const { return variables.empty() && rows.empty(); }
+};
 
 struct Entry {
   int row = 0;  // (for Q: first variable)
@@ -35,6 +47,10 @@ struct Problem {
   // bound). Ignored unless it has exactly num_rows() entries; a singular hint is repaired by the backend.
   std::vector<int> basis_hint;
   bool hint_primal_feasible = false;  // the hint's basic solution satisfies the bounds: start with primal simplex
+  // Optional full starting basis (e.g. SolveResult::basis of the previous problem of a sequence); when
+  // given it must have one status per variable and per row, and it replaces basis_hint. A basis that does
+  // not fit the new bounds is repaired by the backend (CLP's dual simplex starts from it).
+  Basis warm_start;
 
   int num_variables() const { return static_cast<int>(cost.size()); }
   int num_rows() const { return static_cast<int>(row_lower.size()); }
@@ -59,11 +75,19 @@ struct SolveResult {
   std::string message;        // human-readable detail (always set unless optimal)
   int native_status = 0;      // the backend's own code, for diagnostics only
   std::string solver;         // which backend answered
+  Basis basis;                // simplex backends: the final basis (also when not optimal), for a warm start
+  int iterations = 0;         // simplex pivots (CLP); 0 where the backend does not count them
 };
 
 struct SolverOptions {
   double feasibility_tolerance = 1e-9;  // accepted violation of rows and bounds
+  double optimality_tolerance = 1e-9;   // accepted dual infeasibility (reduced costs of the wrong sign)
   int max_iterations = 0;               // 0: the backend's default
+  // Let the backend rescale rows and columns before solving (CLP: its automatic scaling). Off for small,
+  // well-scaled problems solved many times: there the rescaling, and the primal clean-up of unscaled
+  // infeasibilities it can leave, cost more than they save (the planner's overhang optimiser: about a third
+  // of the time per linear program, modules/planner/README.md).
+  bool scale = true;
 };
 
 class Solver {

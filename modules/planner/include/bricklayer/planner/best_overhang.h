@@ -30,12 +30,19 @@ struct OverhangStack {
   std::vector<PlacedBlock> blocks;  // sorted by row, then x
 };
 
+// What one optimisation cost (for benchmarks and the generator's progress figures).
+struct OptimiseStats {
+  int iterations = 0;        // trust-region steps
+  int linear_programs = 0;   // linear programs solved
+  int failed_programs = 0;   // of those, ended without an optimal answer (the step is then shrunk)
+};
+
 // Optimises the positions of a layout (rows fixed, x the start) for the largest overhang of block target.
 // Returns nothing when the optimiser ends infeasible (residual above tolerance), which is common for starts
 // far from balanced. Throws std::invalid_argument on a target out of range, a negative row, a non-finite x or
-// a row with no row below it.
+// a row with no row below it. stats (optional) receives what the optimisation cost.
 std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& start, int target,
-                                             double tolerance = 1e-9);
+                                             double tolerance = 1e-9, OptimiseStats* stats = nullptr);
 
 // Seeded brick-wall start layouts of n blocks with random row profiles (used by the search for n >= 8).
 std::vector<std::vector<PlacedBlock>> wall_layouts(int n, int count, uint64_t seed);
