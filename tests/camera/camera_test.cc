@@ -104,6 +104,10 @@ TEST_CASE("missing sources and bad flags are clear errors with a non-zero exit")
   CHECK(wait_exit(spawn({kBin, "--images", "/nonexistent-dir", "--lcm-url", kUrl}), 10) == 1);
   CHECK(wait_exit(spawn({kBin, "--images", "/tmp", "--video", "x.avi", "--lcm-url", kUrl}), 10) == 2);
   CHECK(wait_exit(spawn({kBin, "--images", "/tmp", "--format", "gif", "--lcm-url", kUrl}), 10) == 2);
+  CHECK(wait_exit(spawn({kBin, "--images", "/tmp", "--exposure", "fast", "--lcm-url", kUrl}), 10) == 2);
+  CHECK(wait_exit(spawn({kBin, "--images", "/tmp", "--power-line-hz", "55", "--lcm-url", kUrl}), 10) == 2);
+  // --list-controls asks the kernel: /dev/null is a device node but not a camera.
+  CHECK(wait_exit(spawn({kBin, "--device", "/dev/null", "--list-controls"}), 10) == 1);
   fs::path empty = temp_dir("empty");
   CHECK(wait_exit(spawn({kBin, "--images", empty.string(), "--lcm-url", kUrl}), 10) == 1);
   fs::remove_all(empty);

@@ -6,10 +6,15 @@
 // Publishes:  BL_IMAGE (image_t, JPEG or PNG) with a frame number counting from 0 and the capture
 //             utime (wall clock when the frame was read); BL_HEARTBEAT once a second ("fps" value).
 // A camera paces itself and its driver keeps one frame (only the newest); files are paced at --fps.
+// A camera's exposure, gain, white balance and focus are set from the flags and their automatic modes
+// locked (camera_controls.h); what the driver accepted is logged, and each control it lacks or
+// refuses is a warning (heartbeat value "control_warnings"), never a failure.
 #include <chrono>
+#include <iostream>
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "bricklayer/camera/camera_controls.h"
 #include "bricklayer/camera/frame_source.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/flags.h"
@@ -31,6 +36,11 @@ class CameraProcess {
         quality_(quality),
         image_channel_(channel(kImageChannel)) {
     log::info("publishing ", source_->describe(), " on ", image_channel_, " as ", format_);
+  }
+
+  void ReportControlWarnings(int warnings) {
+    module_.set_value("control_warnings", warnings);
+    if (warnings > 0) module_.set_status("camera controls: " + std::to_string(warnings) + " warnings (see the log)");
   }
 
   int Run() {
@@ -83,6 +93,35 @@ class CameraProcess {
   std::chrono::steady_clock::time_point started_;
 };
 
+// Sets the camera's controls; returns how many warnings it logged. Controls left unset are locked at
+// what the automatic modes chose after `settle_s` seconds of frames (they adjust only while streaming).
+int SetCameraControls(camera::FrameSource& source, const std::string& device, const camera::CameraControls& controls,
+                      double settle_s) {
+  if (!controls.all_values() && settle_s > 0) {
+    log::info("letting the automatic modes settle for ", settle_s, " s before locking them");
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(settle_s);
+    cv::Mat frame;
+    while (std::chrono::steady_clock::now() < end && !Module::stop_requested() && source.next(frame)) {
+    }
+  }
+  try {
+    camera::V4l2ControlDevice dev(device);
+    int warnings = 0;
+    for (const camera::ControlResult& r : camera::apply_controls(dev, controls)) {
+      if (r.warning()) {
+        ++warnings;
+        log::warn("camera control ", r.describe());
+      } else {
+        log::info("camera control ", r.describe());
+      }
+    }
+    return warnings;
+  } catch (const std::exception& e) {
+    log::warn("camera controls not set: ", e.what());
+    return 1;
+  }
+}
+
 int Main(int argc, char** argv) {
   Flags flags("bricklayer-camera", "Camera frames onto the bus: a V4L2 camera, a video file or a folder of images -> image_t on BL_IMAGE.");
   flags.add("device", "", "V4L2 camera: index (0) or path (/dev/video0)");
@@ -94,6 +133,9 @@ int Main(int argc, char** argv) {
   flags.add("height", "480", "camera frame height to request (0: the driver's)");
   flags.add("format", "jpeg", "frame encoding: jpeg or png");
   flags.add("jpeg-quality", "90", "JPEG quality 1..100");
+  camera::add_control_flags(flags);
+  flags.add("settle-s", "2", "camera: seconds of frames before locking the automatic modes of controls left unset");
+  flags.add_bool("list-controls", "print the camera's V4L2 controls (range, default, current value) and exit");
   flags.add("lcm-url", "", "LCM URL (default: LCM_DEFAULT_URL, else host-only udpm ttl=0)");
   flags.add("log-level", "info", "debug, info, warn or error");
   if (!flags.parse(argc, argv)) return 0;
@@ -110,17 +152,32 @@ int Main(int argc, char** argv) {
   int width = static_cast<int>(flags.get_int("width")), height = static_cast<int>(flags.get_int("height"));
   if (width < 0 || height < 0 || width > 8192 || height > 8192) throw FlagError("--width/--height must be 0..8192");
 
+  const camera::CameraControls controls = camera::parse_controls([&](const std::string& name) { return flags.get(name); });
+  const double settle_s = flags.get_double("settle-s");
+  if (settle_s < 0 || settle_s > 60) throw FlagError("--settle-s must be between 0 and 60");
+  const std::string device = flags.get("device").empty() ? "0" : flags.get("device");
+  if (flags.get_bool("list-controls")) {
+    if (sources > 0 && flags.get("device").empty()) throw FlagError("--list-controls needs a camera (--device), not a file");
+    camera::V4l2ControlDevice dev(device);
+    std::cout << dev.describe() << "\n";
+    for (const std::string& line : camera::describe_controls(dev)) std::cout << "  " << line << "\n";
+    return 0;
+  }
+
   std::string url = resolve_lcm_url(flags.get("lcm-url"));
   check_lcm_url(url);
   std::unique_ptr<camera::FrameSource> source;
+  int control_warnings = 0;
   if (!flags.get("video").empty()) {
     source = camera::open_video(flags.get("video"), fps, flags.get_bool("loop"));
   } else if (!flags.get("images").empty()) {
     source = camera::open_folder(flags.get("images"), fps, flags.get_bool("loop"));
   } else {
-    source = camera::open_camera(flags.get("device").empty() ? "0" : flags.get("device"), width, height);
+    source = camera::open_camera(device, width, height);
+    control_warnings = SetCameraControls(*source, device, controls, settle_s);
   }
   CameraProcess process(url, std::move(source), format, quality);
+  process.ReportControlWarnings(control_warnings);
   return process.Run();
 }
 

@@ -24,11 +24,8 @@ class CameraSource final : public FrameSource {
     try_set(cv::CAP_PROP_BUFFERSIZE, 1, "a one-frame buffer");
     if (width > 0) try_set(cv::CAP_PROP_FRAME_WIDTH, width, "the frame width");
     if (height > 0) try_set(cv::CAP_PROP_FRAME_HEIGHT, height, "the frame height");
-    // Automatic exposure, gain and white balance would change the board's brightness under the
-    // players' shadows and the projector's light, which vision must instead see as they are.
-    try_set(cv::CAP_PROP_AUTO_EXPOSURE, 1, "manual exposure (V4L2 1 = manual)");
-    try_set(cv::CAP_PROP_AUTO_WB, 0, "fixed white balance");
-    try_set(cv::CAP_PROP_GAIN, cap_.get(cv::CAP_PROP_GAIN), "a fixed gain");
+    // Exposure, gain, white balance and focus are set and locked through the V4L2 controls
+    // themselves (camera_controls.h), not OpenCV's CAP_PROP values, which skip what they cannot map.
     fps_ = cap_.get(cv::CAP_PROP_FPS);
     if (!(fps_ > 0)) fps_ = 30.0;
   }

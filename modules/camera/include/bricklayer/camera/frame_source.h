@@ -27,8 +27,8 @@ class FrameSource {
   virtual int64_t unreadable() const { return 0; }
 };
 
-// A V4L2 camera: "0" or "/dev/video0". Keeps a one-frame driver buffer (only the newest frame), locks
-// auto exposure, gain and white balance where the driver allows, and logs what it could not lock.
+// A V4L2 camera: "0" or "/dev/video0". Keeps a one-frame driver buffer (only the newest frame).
+// Its exposure, gain, white balance and focus are camera_controls.h's business.
 // Throws std::runtime_error when the device cannot be opened.
 std::unique_ptr<FrameSource> open_camera(const std::string& device, int width, int height);
 
