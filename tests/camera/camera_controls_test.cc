@@ -94,7 +94,7 @@ TEST_CASE("controls left unset are locked at the driver's current values") {
            id == V4L2_CID_EXPOSURE_AUTO_PRIORITY));
 }
 
-TEST_CASE("a control the driver lacks is a warning, not a failure; the rest is still set") {
+TEST_CASE("a control the driver lacks is a warning, not a failure, the rest is still set") {
   FakeControlDevice dev;
   dev.add_menu(V4L2_CID_EXPOSURE_AUTO, "Auto Exposure", {0, 1}, 0);
   dev.add_int(V4L2_CID_EXPOSURE, "Exposure", 1, 500, 1, 120);  // no absolute control: the plain one

@@ -1,0 +1,99 @@
+// NETNS: the clock check of the real bricklayer-doctor against real heartbeats of another "host": a
+// bricklayer-prediction process in a UTS namespace of its own (hostname peer-host), its wall clock
+// shifted by libfaketime (LD_PRELOAD; the package faketime), so the offset it must find is known.
+// The offset estimate itself is also checked on recorded heartbeat samples.
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <regex>
+
+#include "bricklayer/doctor/clock_check.h"
+#include "doctor_test_util.h"
+
+using namespace bricklayer;
+using test::check_line;
+using test::severity;
+namespace fs = std::filesystem;
+
+namespace {
+const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0";
+const std::string kFaketime = "/usr/lib/x86_64-linux-gnu/faketime/libfaketime.so.1";
+
+// bricklayer-prediction on "peer-host", its clock shifted by `shift` (libfaketime's syntax: "-0.5" s).
+pid_t start_peer(const std::string& shift) {
+  std::string script = "hostname peer-host && ";
+  // An AddressSanitizer build insists on coming first among the libraries; libfaketime must (it
+  // replaces clock_gettime), so the order check is off for the peer alone.
+  if (!shift.empty())
+    script += "export FAKETIME='" + shift + "' LD_PRELOAD=" + kFaketime +
+              " ASAN_OPTIONS=\"${ASAN_OPTIONS:-}:verify_asan_link_order=0\" && ";
+  script += "exec \"$0\" --lcm-url '" + kUrl + "'";
+  return test::spawn({"/usr/bin/unshare", getuid() == 0 ? "-u" : "-ru", "sh", "-c", script, test::program("bricklayer-prediction")});
+}
+
+double offset_in(const std::string& line) {
+  std::smatch m;
+  if (!std::regex_search(line, m, std::regex("peer-host is ([0-9.]+) ms (behind|ahead)"))) return 1e9;
+  return std::stod(m[1]) * (m[2] == "behind" ? 1 : -1);
+}
+}  // namespace
+
+TEST_CASE("a peer whose clock is 500 ms behind: the doctor measures it from its heartbeats and warns") {
+  REQUIRE(fs::exists(kFaketime));
+  pid_t peer = start_peer("-0.5");
+  auto r = test::run_doctor({"projector-host", "--checks", "clock", "--lcm-url", kUrl, "--listen-s", "3"});
+  test::stop(peer);
+  INFO(r.out);
+  const std::string line = check_line(r.out, "clock");
+  CHECK(severity(line) == "warning");
+  CHECK(offset_in(line) == Approx(500).margin(40));
+  CHECK(line.find("fix: run NTP on both hosts") != std::string::npos);
+  CHECK(r.code == 0);  // no module compares clocks: a warning, not a failure
+}
+
+TEST_CASE("a peer 300 ms ahead, and one on the same clock") {
+  pid_t ahead = start_peer("+0.3");
+  auto r = test::run_doctor({"camera-host", "--checks", "clock", "--lcm-url", kUrl, "--listen-s", "3"});
+  test::stop(ahead);
+  INFO(r.out);
+  CHECK(offset_in(check_line(r.out, "clock")) == Approx(-300).margin(40));
+
+  pid_t same = start_peer("");
+  r = test::run_doctor({"camera-host", "--checks", "clock", "--lcm-url", kUrl, "--listen-s", "3"});
+  test::stop(same);
+  INFO(r.out);
+  const std::string line = check_line(r.out, "clock");
+  CHECK(severity(line) == "ok");
+  CHECK(std::abs(offset_in(line)) < doctor::kClockWarningMs);
+}
+
+TEST_CASE("no other host heard: a warning saying what to start, one host: nothing to check") {
+  auto r = test::run_doctor({"camera-host", "--checks", "clock", "--lcm-url", kUrl, "--listen-s", "1.5"});
+  INFO(r.out);
+  CHECK(check_line(r.out, "clock").find("warning  clock                no heartbeat from another host in 2 s") == 0);
+  r = test::run_doctor({"demo", "--checks", "clock", "--lcm-url", kUrl});
+  CHECK(check_line(r.out, "clock").find("ok       clock                one host") == 0);
+}
+
+TEST_CASE("offsets from recorded heartbeats: the smallest difference per host, own host ignored") {
+  std::vector<doctor::HeartbeatSample> samples = {
+      {"prediction", "peer:10", 1'000'000, 1'250'400},  // 250.4 ms: offset + 0.4 ms delay
+      {"projection", "peer:11", 2'000'000, 2'250'200},  // the fastest: 250.2
+      {"prediction", "peer:10", 3'000'000, 3'253'000},  // a slow one
+      {"vision", "here:5", 1'000'000, 9'000'000},       // our own host: not a peer
+      {"logger", "far:7", 5'000'000, 4'990'000},        // 10 ms ahead
+  };
+  auto peers = doctor::estimate_offsets(samples, "here");
+  REQUIRE(peers.size() == 2);
+  CHECK(peers[0].host == "far");
+  CHECK(peers[0].offset_ms == Approx(-10));
+  CHECK(peers[1].host == "peer");
+  CHECK(peers[1].offset_ms == Approx(250.2));
+  CHECK(peers[1].spread_ms == Approx(2.8));
+  CHECK(peers[1].samples == 3);
+  doctor::HostPlan plan;
+  plan.two_hosts = true;
+  CHECK(doctor::judge_clock(plan, peers, 3).severity == doctor::Severity::kWarning);
+  CHECK(doctor::judge_clock(plan, {{"peer", 0.3, 0.1, 3}}, 3).severity == doctor::Severity::kOk);
+}
