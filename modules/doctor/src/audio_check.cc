@@ -1,38 +1,11 @@
 #include "bricklayer/doctor/audio_check.h"
+#include "bricklayer/doctor/quiet_stderr.h"
 
 #include <SDL.h>
-#include <fcntl.h>
-#include <unistd.h>
 
 #include <string>
 
 namespace bricklayer::doctor {
-namespace {
-
-// libasound prints its own errors to stderr while SDL probes ("cannot find card '0'"); the check's line
-// carries SDL's summary of them, so the probe runs with stderr closed.
-class QuietStderr {
- public:
-  QuietStderr() : saved_(dup(2)) {
-    const int null = open("/dev/null", O_WRONLY | O_CLOEXEC);
-    if (null >= 0) {
-      dup2(null, 2);
-      close(null);
-    }
-  }
-  ~QuietStderr() {
-    if (saved_ >= 0) {
-      dup2(saved_, 2);
-      close(saved_);
-    }
-  }
-
- private:
-  int saved_;
-};
-
-}  // namespace
-
 CheckResult check_audio(const HostPlan& plan) {
   const std::string name = "audio";
   if (!plan.projection) return CheckResult::ok(name, "profile " + plan.profile + " runs no projection");

@@ -9,7 +9,6 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include <lcm/lcm-cpp.hpp>
 
 #include <cerrno>
 #include <chrono>
@@ -18,6 +17,8 @@
 #include <stdexcept>
 
 #include "bricklayer/common/lcm_url.h"
+#include "bricklayer/doctor/quiet_stderr.h"
+#include "bricklayer/runtime/lcm_bus.h"
 
 namespace bricklayer::doctor {
 namespace {
@@ -180,34 +181,29 @@ CheckResult check_bus_loopback(const HostPlan& plan, double timeout_s) {
   } catch (const std::invalid_argument& e) {
     return CheckResult::failed(name, e.what(), "see 'bus url'");
   }
-  lcm::LCM bus(plan.lcm_url);
-  if (!bus.good() || bus.getFileno() < 0)
-    return CheckResult::failed(name, "LCM cannot open " + plan.lcm_url, "see 'multicast route'");
-  // A channel of this process alone; the payload carries its pid so another doctor's echo is not ours.
+  QuietStderr quiet;
+  runtime::LcmBus bus(plan.lcm_url);
+  if (!bus.open()) return CheckResult::failed(name, "LCM cannot open " + plan.lcm_url + ": " + bus.problem(), "see 'multicast route'");
+  // A channel of this process alone, so another doctor's check is never taken for ours.
   const std::string channel = "BL_DOCTOR_LOOPBACK_" + std::to_string(getpid());
-  struct Catcher {
-    bool got = false;
-    void handle(const lcm::ReceiveBuffer*, const std::string&) { got = true; }
-  } catcher;
-  lcm::Subscription* sub = bus.subscribe(channel, &Catcher::handle, &catcher);
+  bool got = false;
+  bus.subscribe(channel, runtime::QueuePolicy::keep(16), [&](const runtime::Received&) { got = true; });
   const auto start = std::chrono::steady_clock::now();
   const auto deadline = start + std::chrono::duration<double>(timeout_s);
   const uint8_t payload[16] = {};
   auto next_send = start;
-  while (!catcher.got && std::chrono::steady_clock::now() < deadline) {
+  bool sent = false;
+  while (!got && std::chrono::steady_clock::now() < deadline) {
     if (std::chrono::steady_clock::now() >= next_send) {
-      if (bus.publish(channel, payload, sizeof(payload)) != 0) {
-        bus.unsubscribe(sub);
-        return CheckResult::failed(name, "publishing on " + plan.lcm_url + " failed: " + std::strerror(errno), "see 'multicast route'");
-      }
+      sent = bus.publish(channel, payload, sizeof(payload)) || sent;
       next_send += std::chrono::milliseconds(100);
     }
-    bus.handleTimeout(20);
+    bus.handle(20);
   }
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  bus.unsubscribe(sub);
-  if (!catcher.got)
-    return CheckResult::failed(name, "a message sent on " + plan.lcm_url + " did not come back within " +
+  if (!got)
+    return CheckResult::failed(name, std::string(sent ? "a message sent on " : "nothing could be sent on ") + plan.lcm_url +
+                                         " (" + (bus.problem().empty() ? "no answer" : bus.problem()) + ") within " +
                                          std::to_string(static_cast<int>(timeout_s * 1000)) + " ms: this host's modules cannot hear each other",
                                "check the multicast route and the firewall (allow UDP to the group's port)");
   char detail[128];

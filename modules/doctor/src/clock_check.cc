@@ -7,9 +7,12 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <stdexcept>
 
 #include "bricklayer/common/channels.h"
-#include "bricklayer/common/module.h"
+#include "bricklayer/doctor/quiet_stderr.h"
+#include "bricklayer/runtime/codec.h"
+#include "bricklayer/runtime/lcm_bus.h"
 #include "bricklayer/heartbeat_t.hpp"
 
 namespace bricklayer::doctor {
@@ -64,19 +67,32 @@ CheckResult judge_clock(const HostPlan& plan, const std::vector<PeerOffset>& pee
 }
 
 std::vector<HeartbeatSample> listen_heartbeats(const std::string& url, double seconds) {
-  Module bus("doctor", url);
+  QuietStderr quiet;
+  runtime::LcmBus bus(url);
+  if (!bus.open()) throw std::runtime_error("cannot open " + url + ": " + bus.problem());
   std::vector<HeartbeatSample> samples;
-  bus.subscribe<heartbeat_t>(channel(kHeartbeatChannel), [&](const heartbeat_t& hb) {
-    samples.push_back({hb.module, hb.instance, hb.utime, wall_utime()});
+  const std::string heartbeats = channel(kHeartbeatChannel);
+  // Every heartbeat counts (several per second from each of the other host's modules).
+  bus.subscribe(heartbeats, runtime::QueuePolicy::keep(1000), [&](const runtime::Received& m) {
+    if (auto hb = runtime::decode<heartbeat_t>(m.data, m.size)) samples.push_back({hb->module, hb->instance, hb->utime, m.utime});
   });
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-  auto next_heartbeat = std::chrono::steady_clock::now();
+  heartbeat_t own{};
+  own.module = "doctor";
+  own.pid = static_cast<int32_t>(getpid());
+  own.instance = own_host_name() + ":" + std::to_string(own.pid);
+  own.status = "checking the clock";
+  const auto start = std::chrono::steady_clock::now();
+  const auto end = start + std::chrono::duration<double>(seconds);
+  auto next_heartbeat = start;
   while (std::chrono::steady_clock::now() < end) {
     if (std::chrono::steady_clock::now() >= next_heartbeat) {
-      bus.publish_heartbeat();
+      own.utime = bus.now_utime();
+      own.uptime_us = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - start).count();
+      const std::vector<uint8_t> bytes = runtime::encode(own);
+      bus.publish(heartbeats, bytes.data(), bytes.size());
       next_heartbeat += std::chrono::seconds(1);
     }
-    bus.lcm().handleTimeout(20);
+    bus.handle(20);
   }
   return samples;
 }
