@@ -235,8 +235,8 @@ CheckResult check_receive_buffers(const HostPlan& plan, const std::string& rmem_
         getsockopt(s.fd, SOL_SOCKET, SO_RCVBUF, &granted, &len) == 0)
       granted /= 2;
   }
-  const std::string sysctl = "sudo sysctl -w net.core.rmem_max=" + std::to_string(std::max<int64_t>(want, kLanReceiveBuffer)) +
-                             " (and the same line in /etc/sysctl.d/90-bricklayer.conf)";
+  const std::string value = "net.core.rmem_max=" + std::to_string(std::max<int64_t>(want, kLanReceiveBuffer));
+  const std::string sysctl = "sudo sysctl -w " + value + " (permanent: the line " + value + " in /etc/sysctl.d/90-bricklayer.conf)";
   if (granted >= 0 && granted < want)
     return CheckResult::warning(name, rmem + ": a socket asking for " + mb(want) + " gets " + mb(granted) +
                                           "; a camera frame is lost whole when one of its 64 KB pieces is dropped",
