@@ -136,3 +136,20 @@ TEST_CASE("automatic modes: lockable ones are ok before bricklayer-camera runs, 
   CHECK(by_name(s, "auto white balance").severity == doctor::Severity::kWarning);
   CHECK(by_name(s, "auto focus").severity == doctor::Severity::kOk);
 }
+
+TEST_CASE("a device held open by another process is found through /proc (a camera in use)") {
+  auto dir = test::temp_dir("users");
+  const std::string node = test::write_file(dir / "video9", "");
+  CHECK(doctor::processes_using(node).empty());
+  pid_t holder = test::spawn({"/bin/sh", "-c", "exec 3<" + node + " && exec sleep 30"});
+  std::vector<std::string> users;
+  for (int i = 0; i < 100 && users.empty(); ++i) {
+    usleep(20000);
+    users = doctor::processes_using(node);
+  }
+  REQUIRE(users.size() == 1);
+  CHECK(users[0] == "sleep (pid " + std::to_string(holder) + ")");
+  test::stop(holder);
+  CHECK(doctor::processes_using(node).empty());
+  fs::remove_all(dir);
+}

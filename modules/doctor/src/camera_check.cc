@@ -1,6 +1,11 @@
 #include "bricklayer/doctor/camera_check.h"
 
+#include <unistd.h>
+
+#include <cctype>
 #include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <cstdio>
 #include <memory>
 
@@ -43,6 +48,28 @@ WantedSize wanted_size(const HostPlan& plan) {
 
 }  // namespace
 
+std::vector<std::string> processes_using(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path target = fs::weakly_canonical(path, ec);
+  const std::string self = std::to_string(getpid());
+  std::vector<std::string> out;
+  for (const auto& proc : fs::directory_iterator("/proc", ec)) {
+    const std::string pid = proc.path().filename().string();
+    if (pid.empty() || !std::isdigit(static_cast<unsigned char>(pid[0])) || pid == self) continue;
+    std::error_code fd_ec;
+    for (const auto& fd : fs::directory_iterator(proc.path() / "fd", fd_ec)) {
+      std::error_code link_ec;
+      if (fs::read_symlink(fd.path(), link_ec) != target) continue;
+      std::string comm;
+      std::ifstream(proc.path() / "comm") >> comm;
+      out.push_back(comm + " (pid " + pid + ")");
+      break;
+    }
+  }
+  return out;
+}
+
 std::vector<CheckResult> check_automatic_controls(camera::ControlDevice& device, bool camera_in_use) {
   std::vector<CheckResult> out;
   for (const camera::AutomaticState& s : camera::inspect_automatic(device)) {
@@ -83,8 +110,16 @@ std::vector<CheckResult> check_camera(const HostPlan& plan, const CameraCheckOpt
       return {CheckResult::failed("camera", e.what(), "connect the camera; list cameras with: v4l2-ctl --list-devices (package v4l-utils)")};
     }
   }
+  const std::vector<std::string> users =
+      plan.camera == Kind::kDevice ? processes_using(camera::v4l2_device_path(plan.camera_source)) : std::vector<std::string>{};
   try {
-    if (plan.camera == Kind::kDevice) {
+    if (!users.empty()) {
+      in_use = true;
+      std::string list;
+      for (const auto& u : users) list += (list.empty() ? "" : ", ") + u;
+      out.push_back(CheckResult::warning("camera", controls->describe() + " present, in use by " + list + ": size and rate not measured",
+                                         "stop the exhibit and run the doctor again for the size and rate"));
+    } else if (plan.camera == Kind::kDevice) {
       source = camera::open_camera(plan.camera_source, plan.camera_width, plan.camera_height);
     } else if (plan.camera == Kind::kVideo) {
       source = camera::open_video(plan.camera_source, plan.camera_fps, false);

@@ -21,6 +21,10 @@ struct CameraCheckOptions {
 
 std::vector<CheckResult> check_camera(const HostPlan& plan, const CameraCheckOptions& options);
 
+// The processes other than this one that hold `path` open ("bricklayer-camera (pid 123)"), from
+// /proc/*/fd: a camera in use cannot be opened for capture a second time.
+std::vector<std::string> processes_using(const std::string& path);
+
 // One line per automatic mode. camera_in_use: a capture is running (bricklayer-camera), so an
 // automatic mode found on was not locked by it.
 std::vector<CheckResult> check_automatic_controls(camera::ControlDevice& device, bool camera_in_use);
