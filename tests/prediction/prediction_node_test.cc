@@ -82,7 +82,7 @@ TEST_CASE("a bad configuration is refused with the field's name") {
   prediction::PredictionConfig ok;
   CHECK_NOTHROW(runtime::validate(ok));
   ok.position_tolerance = 0.5;
-  CHECK_THROWS_WITH(runtime::validate(ok), Catch::Contains("position-tolerance must be in 0..0.05"));
+  CHECK_THROWS_WITH(runtime::validate(ok), Catch::Contains("position-tolerance must be in [0, 0.05]"));
 }
 
 TEST_CASE("the prediction node run twice on the same log publishes byte-identical predictions") {

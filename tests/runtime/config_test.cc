@@ -18,6 +18,7 @@ struct ExampleConfig {
   bool no_filter = false;
   std::string scenario;
   std::string confirm = "2/3";
+  double rate = 30;
   template <typename Visitor>
   void visit(Visitor& v) {
     v(param("annotator", annotator, "which blocks are red").one_of({"exact", "paper", "balance"}));
@@ -26,6 +27,7 @@ struct ExampleConfig {
     v(param("hold", hold, "frames a lost block is held").at_least(0));
     v(param("no-filter", no_filter, "publish raw detections"));
     v(param("scenario", scenario, "scenario file").existing_file());
+    v(param("rate", rate, "frames per second").above_up_to(0, 1000));
     v(param("confirm", confirm, "seen in N of M frames, N/M").must([](const std::string& s) {
       return s.find('/') == std::string::npos ? std::string("must be N/M, e.g. 2/3") : std::string();
     }));
@@ -67,27 +69,29 @@ TEST_CASE("flags come from the declaration: defaults, values, and --help with th
   Flags flags("prog", "summary");
   declare_flags(flags, d);
   const std::string help = flags.help();
-  CHECK(help.find("--tolerance=VALUE  block lengths [0..0.05] (default: 0.005)") != std::string::npos);
+  CHECK(help.find("--tolerance=VALUE  block lengths [[0, 0.05]] (default: 0.005)") != std::string::npos);
   CHECK(help.find("[one of exact, paper, balance] (default: exact)") != std::string::npos);
   CHECK(help.find("--no-filter  publish raw detections") != std::string::npos);
 }
 
 TEST_CASE("a flag outside its rule is an error naming the flag, the rule and the value") {
-  CHECK(flag_error({"--tolerance=0.2"}) == "--tolerance must be in 0..0.05, got 0.2");
+  CHECK(flag_error({"--tolerance=0.2"}) == "--tolerance must be in [0, 0.05], got 0.2");
   CHECK(flag_error({"--annotator=magic"}) == "--annotator must be one of exact, paper, balance, got 'magic'");
-  CHECK(flag_error({"--max-blocks=0"}) == "--max-blocks must be in 1..100000, got 0");
+  CHECK(flag_error({"--max-blocks=0"}) == "--max-blocks must be in [1, 100000], got 0");
   CHECK(flag_error({"--max-blocks=ten"}) == "--max-blocks expects an integer, got 'ten'");
   CHECK(flag_error({"--tolerance=nan"}) == "--tolerance expects a finite number, got 'nan'");
-  CHECK(flag_error({"--hold=-1"}) == "--hold must be in >= 0, got -1");
+  CHECK(flag_error({"--hold=-1"}) == "--hold must be >= 0, got -1");
   CHECK(flag_error({"--confirm=23"}) == "--confirm must be N/M, e.g. 2/3");
   CHECK(flag_error({"--hold=99999999999"}) == "--hold expects an integer, got '99999999999'");
+  CHECK(flag_error({"--rate=0"}) == "--rate must be in (0, 1000], got 0");
+  CHECK(flag_error({"--rate=1000"}).empty());
 }
 
 TEST_CASE("a configuration built in code is checked by the same rules") {
   ExampleConfig c;
   CHECK_NOTHROW(validate(c));
   c.tolerance = -1;
-  CHECK_THROWS_WITH(validate(c), "tolerance must be in 0..0.05, got -1");
+  CHECK_THROWS_WITH(validate(c), "tolerance must be in [0, 0.05], got -1");
 }
 
 TEST_CASE("JSON: what a node records, read back strictly") {
@@ -102,7 +106,7 @@ TEST_CASE("JSON: what a node records, read back strictly") {
   CHECK(to_json(back) == j);
   CHECK_THROWS_WITH(from_json(nlohmann::json{{"anotator", "x"}}, back), Catch::Contains("unknown configuration key 'anotator'"));
   CHECK_THROWS_WITH(from_json(nlohmann::json{{"tolerance", "x"}}, back), "tolerance must be a finite number");
-  CHECK_THROWS_WITH(from_json(nlohmann::json{{"tolerance", 1.0}}, back), "tolerance must be in 0..0.05, got 1");
+  CHECK_THROWS_WITH(from_json(nlohmann::json{{"tolerance", 1.0}}, back), "tolerance must be in [0, 0.05], got 1");
 }
 
 TEST_CASE("NAME=VALUE sets one field (a replay's --set)") {
@@ -119,7 +123,7 @@ TEST_CASE("NAME=VALUE sets one field (a replay's --set)") {
 TEST_CASE("the declaration itself, and the files it names that are missing") {
   ExampleConfig c;
   const nlohmann::json d = describe(c);
-  REQUIRE(d.size() == 7);
+  REQUIRE(d.size() == 8);
   CHECK(d[1]["name"] == "tolerance");
   CHECK(d[1]["min"] == 0.0);
   CHECK(d[1]["max"] == 0.05);

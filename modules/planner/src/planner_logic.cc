@@ -23,8 +23,12 @@ core::Stack to_core_stack(const stack_t& msg, size_t max_blocks) {
   return s;
 }
 
+PlannerLogic::PlannerLogic(PlannerConfig config) : config_(std::move(config)) {
+  config_.collapse.max_time = config_.preview_seconds / seconds_per_time_unit();
+}
+
 void PlannerLogic::on_stack(const stack_t& msg) {
-  Seen seen{msg.utime, msg.frame_number, to_core_stack(msg, config_.max_blocks)};
+  Seen seen{msg.utime, msg.frame_number, to_core_stack(msg, static_cast<size_t>(config_.max_blocks))};
   stacks_.push_back(std::move(seen));
   while (stacks_.size() > std::max<size_t>(config_.remembered_stacks, 1)) stacks_.pop_front();
 }

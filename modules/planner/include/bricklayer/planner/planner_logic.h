@@ -12,15 +12,27 @@
 #include "bricklayer/planner/collapse.h"
 #include "bricklayer/planner/hint.h"
 #include "bricklayer/prediction_t.hpp"
+#include "bricklayer/runtime/config.h"
 #include "bricklayer/stack_t.hpp"
 
 namespace bricklayer::planner {
 
 struct PlannerConfig {
   HintOptions hint;
-  CollapseOptions collapse;
-  size_t max_blocks = 1000;     // larger stacks are ignored (counted as errors by the process)
+  CollapseOptions collapse;     // collapse.max_time is set from preview_seconds
+  double preview_seconds = 0.7;   // longest simulated collapse, seconds of real time
+  int max_blocks = 1000;          // larger stacks are ignored (counted as errors by the process)
   size_t remembered_stacks = 16;  // recent stacks kept to match predictions against
+
+  template <typename Visitor>
+  void visit(Visitor& v) {
+    v(runtime::param("margin", hint.margin,
+                     "hint safety margin, block lengths: suggested blocks stay balanced when shifted by +/- this")
+          .open_range(0, 0.5));
+    v(runtime::param("max-added", hint.max_added, "rebalancing hints add at most this many blocks (1 or 2)").range(1, 2));
+    v(runtime::param("preview-seconds", preview_seconds, "longest simulated collapse, seconds of real time").above_up_to(0, 10));
+    v(runtime::param("max-blocks", max_blocks, "larger stacks are ignored (counted errors)").range(1, 100000));
+  }
 };
 
 // Converts a measured stack_t; throws core::StackError when it is not a valid stack or not STATUS_OK.
@@ -28,7 +40,7 @@ core::Stack to_core_stack(const stack_t& msg, size_t max_blocks = 1000);
 
 class PlannerLogic {
  public:
-  explicit PlannerLogic(PlannerConfig config = {}) : config_(std::move(config)) {}
+  explicit PlannerLogic(PlannerConfig config = {});
 
   // Remembers a stack (the newest is the one hints are computed for). Throws core::StackError for an invalid one.
   void on_stack(const stack_t& msg);

@@ -43,14 +43,18 @@ struct Param {
   std::string name;
   T* value = nullptr;
   std::string help;
-  std::optional<double> min, max;              // numbers: inclusive bounds
+  std::optional<double> min, max;              // numbers: bounds
+  bool min_open = false, max_open = false;     // ... excluded from the range
   std::vector<std::string> choices;            // strings: the allowed values
   std::function<std::string(const T&)> rule;   // any other rule: "" when the value keeps it, else why not
   bool file = false;                           // a path the module reads: it must exist ("" = none)
   bool folder = false;                         // a folder the module reads: it must exist ("" = none)
 
-  Param& range(double lo, double hi) { min = lo; max = hi; return *this; }
+  Param& range(double lo, double hi) { min = lo; max = hi; return *this; }  // [lo, hi]
+  Param& open_range(double lo, double hi) { range(lo, hi); min_open = max_open = true; return *this; }  // (lo, hi)
+  Param& above_up_to(double lo, double hi) { range(lo, hi); min_open = true; return *this; }  // (lo, hi]
   Param& at_least(double lo) { min = lo; return *this; }
+  Param& above(double lo) { min = lo; min_open = true; return *this; }
   Param& one_of(std::vector<std::string> allowed) { choices = std::move(allowed); return *this; }
   Param& must(std::function<std::string(const T&)> check) { rule = std::move(check); return *this; }
   Param& existing_file() { file = true; return *this; }
@@ -143,15 +147,15 @@ inline std::string join(const std::vector<std::string>& items) {
   return out;
 }
 
-// The rule in words, for --help.
+// The rule in words, for --help and errors: [0, 0.05], (0, 0.5), >= 0, > 0, one of a, b.
 template <typename T>
 std::string rule_text(const Param<T>& p) {
-  std::string out;
-  if (p.min && p.max) out = config_detail::to_text(*p.min) + ".." + config_detail::to_text(*p.max);
-  else if (p.min) out = ">= " + config_detail::to_text(*p.min);
-  else if (p.max) out = "<= " + config_detail::to_text(*p.max);
-  if (!p.choices.empty()) out = "one of " + join(p.choices);
-  return out;
+  if (!p.choices.empty()) return "one of " + join(p.choices);
+  if (p.min && p.max)
+    return std::string(p.min_open ? "(" : "[") + to_text(*p.min) + ", " + to_text(*p.max) + (p.max_open ? ")" : "]");
+  if (p.min) return (p.min_open ? "> " : ">= ") + to_text(*p.min);
+  if (p.max) return (p.max_open ? "< " : "<= ") + to_text(*p.max);
+  return "";
 }
 
 }  // namespace config_detail
@@ -161,8 +165,13 @@ template <typename T>
 std::string violation(const Param<T>& p, const T& v) {
   if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
     if (!std::isfinite(static_cast<double>(v))) return "must be a finite number";
-    if ((p.min && static_cast<double>(v) < *p.min) || (p.max && static_cast<double>(v) > *p.max))
-      return "must be in " + config_detail::rule_text(p) + ", got " + config_detail::to_text(v);
+    const double d = static_cast<double>(v);
+    const bool low = p.min && (p.min_open ? d <= *p.min : d < *p.min);
+    const bool high = p.max && (p.max_open ? d >= *p.max : d > *p.max);
+    if (low || high) {
+      const std::string rule = config_detail::rule_text(p);
+      return (rule[0] == '[' || rule[0] == '(' ? "must be in " : "must be ") + rule + ", got " + config_detail::to_text(v);
+    }
   }
   if constexpr (std::is_same_v<T, std::string>) {
     if (!p.choices.empty() && std::find(p.choices.begin(), p.choices.end(), v) == p.choices.end())
@@ -220,7 +229,8 @@ void read_flags(const Flags& flags, Config& config) {
 
 // Checks every field of a configuration built in code; throws std::invalid_argument naming the field.
 template <typename Config>
-void validate(Config& config) {
+void validate(const Config& checked) {
+  Config config = checked;  // visit() hands out pointers to fields: visit a copy
   auto check = [](auto&& p) {
     if (const std::string why = violation(p, *p.value); !why.empty())
       throw std::invalid_argument(p.name + " " + why);
@@ -230,7 +240,8 @@ void validate(Config& config) {
 
 // Every missing file or folder the configuration names, one line each ("--scenario: no such file ...").
 template <typename Config>
-std::vector<std::string> missing_paths(Config& config) {
+std::vector<std::string> missing_paths(const Config& checked) {
+  Config config = checked;
   std::vector<std::string> out;
   auto check = [&out](auto&& p) {
     if (const std::string why = missing_path(p, *p.value); !why.empty()) out.push_back("--" + p.name + ": " + why);
@@ -241,7 +252,8 @@ std::vector<std::string> missing_paths(Config& config) {
 
 // {"name": value, ...}: what a node records in its log, and what a replay starts from.
 template <typename Config>
-nlohmann::json to_json(Config& config) {
+nlohmann::json to_json(const Config& recorded) {
+  Config config = recorded;
   nlohmann::json out = nlohmann::json::object();
   auto put = [&out](auto&& p) { out[p.name] = *p.value; };
   config.visit(put);
@@ -298,13 +310,14 @@ void set_from_text(const std::string& assignment, Config& config) {
 
 // The declaration itself, for tools: [{"name", "type", "default", "help", "min", "max", "choices", "file"}].
 template <typename Config>
-nlohmann::json describe(Config& config) {
+nlohmann::json describe(const Config& described) {
+  Config config = described;
   nlohmann::json out = nlohmann::json::array();
   auto add = [&out](auto&& p) {
     using T = std::remove_reference_t<decltype(*p.value)>;
     nlohmann::json d{{"name", p.name}, {"type", config_detail::type_name<T>()}, {"default", *p.value}, {"help", p.help}};
-    if (p.min) d["min"] = *p.min;
-    if (p.max) d["max"] = *p.max;
+    if (p.min) d[p.min_open ? "above" : "min"] = *p.min;
+    if (p.max) d[p.max_open ? "below" : "max"] = *p.max;
     if (!p.choices.empty()) d["choices"] = p.choices;
     if (p.file) d["file"] = true;
     if (p.folder) d["folder"] = true;
