@@ -16,7 +16,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
-#include "bricklayer/camera/frame_source.h"
+#include "bricklayer/frames/frame_source.h"
 #include "../common/spawn_util.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/module.h"
@@ -119,10 +119,10 @@ TEST_CASE("the folder source skips unreadable images and lists only image files"
   cv::imwrite((dir / "a.jpg").string(), numbered_frame(0));
   std::ofstream(dir / "c.png") << "corrupt";
   std::ofstream(dir / "readme.md") << "x";
-  auto files = camera::list_image_files(dir.string());
+  auto files = frames::list_image_files(dir.string());
   REQUIRE(files.size() == 3);
   CHECK(files[0].filename() == "a.jpg");
-  auto source = camera::open_folder(dir.string(), 10, false);
+  auto source = frames::open_folder(dir.string(), 10, false);
   cv::Mat frame;
   int read = 0;
   while (source->next(frame)) ++read;

@@ -8,9 +8,9 @@
 #include <string>
 
 #include "bricklayer/simcam/render.h"
-#include "bricklayer/vision/block_scale.h"
-#include "bricklayer/vision/detector.h"
-#include "../../modules/vision/bench/evaluate.h"
+#include "bricklayer/detection/block_scale.h"
+#include "bricklayer/detection/detector.h"
+#include "evaluate.h"
 
 using namespace bricklayer;
 
@@ -19,10 +19,10 @@ namespace {
 // The calibration bricklayer-calibrate gives when its board frame is off: board x' = k x / (q x + 1) (and
 // y alike), i.e. a block at the edge reads k long and the reading changes along the board with q.
 calibration_t misscaled(const calibration_t& truth, double k, double q = 0.0) {
-  vision::BoardCorrection wrong;
+  detection::BoardCorrection wrong;
   wrong.scale = k;
   wrong.keystone = q;
-  return vision::apply_board_correction(truth, wrong);
+  return detection::apply_board_correction(truth, wrong);
 }
 
 // Blocks standing apart along the bottom row (from 3.6 left of the edge to 1.1 right of it), one touching
@@ -36,7 +36,7 @@ core::Stack scene(int frame) {
   return s;
 }
 
-double max_x_error(const std::vector<simcam::TrueBlock>& truth, const std::vector<vision::DetectedBlock>& found) {
+double max_x_error(const std::vector<simcam::TrueBlock>& truth, const std::vector<detection::DetectedBlock>& found) {
   double worst = 0;
   for (const auto& t : truth) {
     if (!t.visible) continue;
@@ -58,11 +58,11 @@ TEST_CASE("a mis-scaled board is measured from bottom-row blocks standing apart,
   const simcam::CameraSetup camera = simcam::CameraSetup::random(setup);
   const simcam::ProjectorSetup projector = simcam::ProjectorSetup::random(setup);
   simcam::Renderer renderer(camera, projector);
-  const calibration_t truth = vision::eval::true_calibration(camera, projector);
+  const calibration_t truth = detection::eval::true_calibration(camera, projector);
   const calibration_t wrong = misscaled(truth, k, q);
   INFO("k " << k << ", q " << q << ", setup " << setup << ", nuisance level " << level);
 
-  vision::BlockScaleMeter meter(wrong);
+  detection::BlockScaleMeter meter(wrong);
   std::vector<simcam::Rendered> frames;
   int measured = 0;
   for (int f = 0; f < 10; ++f) {
@@ -83,9 +83,9 @@ TEST_CASE("a mis-scaled board is measured from bottom-row blocks standing apart,
   // Before: x reads wrong (or blocks go unseen); after: every block, including the touching pair and the
   // top block that were not measured, up to 3.7 lengths from the edge, within 0.02 (mild) or 0.025 (harsh).
   // Measured: worst 0.016 / 0.021, typically 0.009 / 0.016; the detector alone reaches 0.01 / 0.02.
-  vision::Detector before, after;
+  detection::Detector before, after;
   before.set_calibration(wrong);
-  after.set_calibration(vision::apply_board_correction(wrong, *fit));
+  after.set_calibration(detection::apply_board_correction(wrong, *fit));
   for (const auto& frame : frames) {
     const auto found = after.detect(frame.bgr).blocks;
     for (const auto& t : frame.truth) {
@@ -104,12 +104,12 @@ TEST_CASE("with the game's red and blue light on the blocks, the projector image
   const simcam::CameraSetup camera = simcam::CameraSetup::random(5);
   const simcam::ProjectorSetup projector = simcam::ProjectorSetup::random(5);
   simcam::Renderer renderer(camera, projector);
-  const calibration_t wrong = misscaled(vision::eval::true_calibration(camera, projector), 0.9, 0.01);
-  vision::BlockScaleMeter meter(wrong);
+  const calibration_t wrong = misscaled(detection::eval::true_calibration(camera, projector), 0.9, 0.01);
+  detection::BlockScaleMeter meter(wrong);
   int measured = 0;
   for (int f = 0; f < 10; ++f) {
     const core::Stack s = scene(f);
-    const cv::Mat light = vision::eval::red_blue_projection(s, camera, projector);
+    const cv::Mat light = detection::eval::red_blue_projection(s, camera, projector);
     meter.set_projector_image(light, projector.size);
     measured += meter.add(renderer.render(s, simcam::Nuisance::level(2), &light, 70 + static_cast<uint64_t>(f)).bgr);
   }
@@ -124,15 +124,15 @@ TEST_CASE("with the game's red and blue light on the blocks, the projector image
 
 TEST_CASE("the fit recovers scale and keystone from exact end lines, drops mispaired ones, and refuses too few or disagreeing blocks") {
   const double w = 1.0 / 40;
-  vision::BoardCorrection truth;  // the correction that makes these board readings right
+  detection::BoardCorrection truth;  // the correction that makes these board readings right
   truth.scale = 1.08;
   truth.keystone = -0.02;
   // Board readings x of true positions X: X = a x / (c x + 1)  =>  x = X / (a - c X).
   auto reading = [&](double X) { return X / (truth.scale - truth.keystone * X); };
-  std::vector<vision::EndLines> m;
+  std::vector<detection::EndLines> m;
   for (double X : {-3.7, -2.4, -1.1, 0.3, 1.5}) m.push_back({reading(X + w / 2), reading(X + 1 - w / 2)});
   std::string why;
-  auto fit = vision::fit_board_correction(m, w, 5, 0.01, &why);
+  auto fit = detection::fit_board_correction(m, w, 5, 0.01, &why);
   REQUIRE(fit.has_value());
   CHECK(fit->scale == Approx(truth.scale).epsilon(1e-6));
   CHECK(fit->keystone == Approx(truth.keystone).margin(1e-6));
@@ -140,52 +140,52 @@ TEST_CASE("the fit recovers scale and keystone from exact end lines, drops mispa
   CHECK(fit->length_at(reading(0.3)) == Approx(reading(1.3) - reading(0.3)).epsilon(1e-6));
 
   m.push_back({reading(-1.8), reading(-1.8) + 0.8});  // a mispaired measurement 20% short
-  fit = vision::fit_board_correction(m, w, 5, 0.01, &why);
+  fit = detection::fit_board_correction(m, w, 5, 0.01, &why);
   REQUIRE(fit.has_value());
   CHECK(fit->outliers == 1);
   CHECK(fit->scale == Approx(truth.scale).epsilon(1e-6));
 
   // Blocks close together: no keystone is fitted from less than kMinSpanForKeystone.
   truth.keystone = 0;
-  const std::vector<vision::EndLines> close = {{reading(0.0125), reading(0.9875)}, {reading(1.2125), reading(2.1875)}};
-  fit = vision::fit_board_correction(close, w, 2, 0.01, &why);
+  const std::vector<detection::EndLines> close = {{reading(0.0125), reading(0.9875)}, {reading(1.2125), reading(2.1875)}};
+  fit = detection::fit_board_correction(close, w, 2, 0.01, &why);
   REQUIRE(fit.has_value());
   CHECK(fit->keystone == 0.0);
   CHECK(fit->scale == Approx(truth.scale).epsilon(1e-6));
 
-  CHECK_FALSE(vision::fit_board_correction({m[0], m[1]}, w, 5, 0.01, &why).has_value());
+  CHECK_FALSE(detection::fit_board_correction({m[0], m[1]}, w, 5, 0.01, &why).has_value());
   CHECK(why.find("need 5") != std::string::npos);
-  std::vector<vision::EndLines> noisy;
+  std::vector<detection::EndLines> noisy;
   for (int i = 0; i < 10; ++i) noisy.push_back({-3.0 + 0.6 * i, -3.0 + 0.6 * i + (i % 2 ? 0.96 : 1.0)});
-  CHECK_FALSE(vision::fit_board_correction(noisy, w, 5, 0.01, &why).has_value());
+  CHECK_FALSE(detection::fit_board_correction(noisy, w, 5, 0.01, &why).has_value());
   CHECK(why.find("disagree") != std::string::npos);
 }
 
 TEST_CASE("no blocks, only touching blocks, or blocks only in upper rows measure nothing, with a message saying what to do") {
   simcam::Renderer renderer;
-  const calibration_t truth = vision::eval::true_calibration(renderer.camera(), renderer.projector());
+  const calibration_t truth = detection::eval::true_calibration(renderer.camera(), renderer.projector());
   core::Stack touching, upper;
   touching.blocks = {{1, 0, -3.0}, {2, 0, -2.0}, {3, 0, -1.0}, {4, 0, 0.0}, {5, 1, -2.5}};
   upper.blocks = {{1, 1, -3.0}, {2, 1, -1.5}, {3, 2, -2.5}, {4, 2, 0.2}};
   for (const core::Stack& s : {core::Stack{}, touching, upper}) {
-    vision::BlockScaleMeter meter(truth);
+    detection::BlockScaleMeter meter(truth);
     for (uint64_t f = 0; f < 5; ++f) meter.add(renderer.render(s, simcam::Nuisance::level(1), nullptr, f).bgr);
     std::string why;
     CHECK_FALSE(meter.result(10, 0.01, &why).has_value());
     CHECK(why.find("stand 3 or more blocks on the bottom row, apart from each other") != std::string::npos);
   }
-  vision::BlockScaleMeter meter(truth);
+  detection::BlockScaleMeter meter(truth);
   CHECK(meter.add(cv::Mat()) == 0);
   CHECK(meter.add(cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(0))) == 0);
 }
 
 TEST_CASE("apply_board_correction maps board coordinates by x' = a x / (c x + 1), y' = a y / (c x + 1), and refuses nonsense") {
   simcam::Renderer renderer;
-  const calibration_t c = vision::eval::true_calibration(renderer.camera(), renderer.projector());
-  vision::BoardCorrection k;
+  const calibration_t c = detection::eval::true_calibration(renderer.camera(), renderer.projector());
+  detection::BoardCorrection k;
   k.scale = 1.25;
   k.keystone = 0.03;
-  const calibration_t r = vision::apply_board_correction(c, k);
+  const calibration_t r = detection::apply_board_correction(c, k);
   auto board = [](const calibration_t& cal, double u, double v) {
     const double* h = cal.camera_to_board;
     const double w = h[6] * u + h[7] * v + h[8];
@@ -201,8 +201,8 @@ TEST_CASE("apply_board_correction maps board coordinates by x' = a x / (c x + 1)
   }
   for (int i = 0; i < 9; ++i) CHECK(r.camera_to_projector[i] == c.camera_to_projector[i]);
   k.scale = 0.0;
-  CHECK_THROWS_AS(vision::apply_board_correction(c, k), std::invalid_argument);
+  CHECK_THROWS_AS(detection::apply_board_correction(c, k), std::invalid_argument);
   k.scale = 1.0;
   k.keystone = std::nan("");
-  CHECK_THROWS_AS(vision::apply_board_correction(c, k), std::invalid_argument);
+  CHECK_THROWS_AS(detection::apply_board_correction(c, k), std::invalid_argument);
 }

@@ -11,8 +11,8 @@
 
 #include "bricklayer/simcam/piles.h"
 #include "bricklayer/simcam/render.h"
-#include "bricklayer/vision/detector.h"
-#include "../../modules/vision/bench/evaluate.h"
+#include "bricklayer/detection/detector.h"
+#include "evaluate.h"
 
 using namespace bricklayer;
 
@@ -23,7 +23,7 @@ struct Score {
 };
 
 // Greedy match of detections to truth by row-independent nearest x (so a wrong row is counted, not hidden).
-Score score(const std::vector<simcam::TrueBlock>& truth, const std::vector<vision::DetectedBlock>& found) {
+Score score(const std::vector<simcam::TrueBlock>& truth, const std::vector<detection::DetectedBlock>& found) {
   Score s;
   std::vector<bool> used(found.size(), false);
   for (const auto& t : truth) {
@@ -65,7 +65,7 @@ TEST_CASE("every rendered block is found once, in its row, within 0.02 block len
   const auto level = GENERATE(0, 1, 2);
   const bool projected = GENERATE(false, true);
   simcam::Renderer renderer;
-  vision::Detector detector;
+  detection::Detector detector;
   for (uint64_t seed = 1; seed <= 4; ++seed) {
     simcam::PileOptions options;
     options.blocks = 20 + 10 * static_cast<int>(seed);
@@ -75,7 +75,7 @@ TEST_CASE("every rendered block is found once, in its row, within 0.02 block len
     else detector.clear_projector_image();
     auto frame = renderer.render(pile, simcam::Nuisance::level(level), projected ? &light : nullptr, seed);
     auto detection = detector.detect(frame.bgr);
-    REQUIRE(detection.status == vision::Detection::kOk);
+    REQUIRE(detection.status == detection::Detection::kOk);
     Score s = score(frame.truth, detection.blocks);
     INFO("level " << level << (projected ? " projected" : "") << " seed " << seed << ": " << s.matched << " matched, "
                   << s.missed << " missed, " << s.extra << " extra, " << s.wrong_row << " wrong rows, max dx "
@@ -91,7 +91,7 @@ TEST_CASE("touching blocks in a row are two blocks, not one long one") {
   core::Stack s;
   s.blocks = {{1, 0, -2.0}, {2, 0, -1.0}, {3, 1, -1.5}};  // 1 and 2 touch end to end
   simcam::Renderer renderer;
-  vision::Detector detector;
+  detection::Detector detector;
   auto frame = renderer.render(s, simcam::Nuisance::level(1), nullptr, 7);
   auto detection = detector.detect(frame.bgr);
   Score sc = score(frame.truth, detection.blocks);
@@ -107,7 +107,7 @@ TEST_CASE("out-of-focus hands and a player's shadow on an empty board are not bl
   n.shadow_count = 3;
   n.shadow_strength = 0.6;
   simcam::Renderer renderer;
-  vision::Detector detector;
+  detection::Detector detector;
   for (uint64_t seed = 1; seed <= 5; ++seed) {
     auto frame = renderer.render(core::Stack{}, n, nullptr, seed);
     auto detection = detector.detect(frame.bgr);
@@ -117,10 +117,10 @@ TEST_CASE("out-of-focus hands and a player's shadow on an empty board are not bl
 }
 
 TEST_CASE("an empty or black frame is no frame or no board, not blocks") {
-  vision::Detector detector;
-  CHECK(detector.detect(cv::Mat()).status == vision::Detection::kNoFrame);
+  detection::Detector detector;
+  CHECK(detector.detect(cv::Mat()).status == detection::Detection::kNoFrame);
   auto black = detector.detect(cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(0)));
-  CHECK(black.status == vision::Detection::kNoBoard);
+  CHECK(black.status == detection::Detection::kNoBoard);
   CHECK(black.blocks.empty());
 }
 
@@ -129,23 +129,23 @@ TEST_CASE("at the harsh nuisance level blocks are found with recall and precisio
   // Seeds differ from the benchmark's (bricklayer-bench-vision uses mix(seed...) piles).
   const bool projected = GENERATE(false, true);
   simcam::Renderer renderer;
-  vision::Detector detector;
-  vision::eval::FrameScore total;
+  detection::Detector detector;
+  detection::eval::FrameScore total;
   std::vector<double> dx;
   for (uint64_t seed = 500; seed < 520; ++seed) {
     simcam::PileOptions options;
     options.blocks = 10 + static_cast<int>((seed * 37) % 71);
     options.min_gap = seed % 3 == 0 ? 0.0 : 0.02;
     const core::Stack pile = simcam::random_pile(seed, options);
-    const cv::Mat light = vision::eval::red_blue_projection(pile, renderer.camera(), renderer.projector());
+    const cv::Mat light = detection::eval::red_blue_projection(pile, renderer.camera(), renderer.projector());
     if (projected)
       detector.set_projector_image(light, renderer.projector().size);
     else
       detector.clear_projector_image();
     const auto frame = renderer.render(pile, simcam::Nuisance::level(3), projected ? &light : nullptr, seed);
     const auto detection = detector.detect(frame.bgr);
-    REQUIRE(detection.status == vision::Detection::kOk);
-    const auto s = vision::eval::score(frame.truth, detection.blocks);
+    REQUIRE(detection.status == detection::Detection::kOk);
+    const auto s = detection::eval::score(frame.truth, detection.blocks);
     total.truth += s.truth, total.detected += s.detected, total.matched += s.matched, total.row_wrong += s.row_wrong;
     dx.insert(dx.end(), s.dx.begin(), s.dx.end());
   }

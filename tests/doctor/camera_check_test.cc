@@ -10,9 +10,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
-#include "../camera/fake_control_device.h"
+#include "../frames/fake_control_device.h"
 #include "bricklayer/calibration/calibration_file.h"
-#include "bricklayer/camera/camera_controls.h"
+#include "bricklayer/frames/camera_controls.h"
 #include "bricklayer/doctor/camera_check.h"
 #include "doctor_test_util.h"
 
@@ -123,7 +123,7 @@ TEST_CASE("automatic modes: lockable ones are ok before bricklayer-camera runs, 
   CHECK(by_name(busy, "auto exposure").severity == doctor::Severity::kWarning);
   CHECK(by_name(busy, "auto white balance").severity == doctor::Severity::kWarning);
   // Locked by bricklayer-camera's controls: ok while in use.
-  camera::apply_controls(dev, {});
+  frames::apply_controls(dev, {});
   for (const auto& r : doctor::check_automatic_controls(dev, true)) {
     INFO(r.name << ": " << r.detail);
     CHECK(r.severity == doctor::Severity::kOk);

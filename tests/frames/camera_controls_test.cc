@@ -10,12 +10,12 @@
 #include <map>
 #include <string>
 
-#include "bricklayer/camera/camera_controls.h"
+#include "bricklayer/frames/camera_controls.h"
 #include "fake_control_device.h"
 
 using namespace bricklayer;
-using camera::ControlOutcome;
-using camera::ControlResult;
+using frames::ControlOutcome;
+using frames::ControlResult;
 using test::FakeControlDevice;
 
 namespace {
@@ -31,13 +31,13 @@ int warnings(const std::vector<ControlResult>& results) {
 
 TEST_CASE("every automatic mode is locked before its manual value is set, and every value is read back") {
   FakeControlDevice dev = FakeControlDevice::uvc_webcam();
-  camera::CameraControls want;
+  frames::CameraControls want;
   want.exposure = 100;
   want.gain = 0;
   want.white_balance_k = 4600;
   want.focus = 40;
   want.power_line_hz = 50;
-  auto results = camera::apply_controls(dev, want);
+  auto results = frames::apply_controls(dev, want);
   for (const auto& r : results) INFO(r.describe());
   CHECK(warnings(results) == 0);
   auto r = by_name(results);
@@ -64,10 +64,10 @@ TEST_CASE("every automatic mode is locked before its manual value is set, and ev
 
 TEST_CASE("values the driver clamps or rounds are reported as adjusted, with what it chose") {
   FakeControlDevice dev = FakeControlDevice::uvc_webcam();
-  camera::CameraControls want;
+  frames::CameraControls want;
   want.exposure = 5000;  // above 2047
   want.focus = 42;       // step 5
-  auto r = by_name(camera::apply_controls(dev, want));
+  auto r = by_name(frames::apply_controls(dev, want));
   CHECK(r["exposure"].outcome == ControlOutcome::kAdjusted);
   CHECK(r["exposure"].accepted == 2047);
   CHECK(r["exposure"].warning());
@@ -78,7 +78,7 @@ TEST_CASE("values the driver clamps or rounds are reported as adjusted, with wha
 
 TEST_CASE("controls left unset are locked at the driver's current values") {
   FakeControlDevice dev = FakeControlDevice::uvc_webcam();
-  auto results = camera::apply_controls(dev, {});
+  auto results = frames::apply_controls(dev, {});
   auto r = by_name(results);
   CHECK(warnings(results) == 0);
   CHECK(r["exposure"].outcome == ControlOutcome::kKept);
@@ -98,11 +98,11 @@ TEST_CASE("a control the driver lacks is a warning, not a failure, the rest is s
   FakeControlDevice dev;
   dev.add_menu(V4L2_CID_EXPOSURE_AUTO, "Auto Exposure", {0, 1}, 0);
   dev.add_int(V4L2_CID_EXPOSURE, "Exposure", 1, 500, 1, 120);  // no absolute control: the plain one
-  camera::CameraControls want;
+  frames::CameraControls want;
   want.exposure = 80;
   want.gain = 10;
   want.power_line_hz = 60;
-  auto results = camera::apply_controls(dev, want);
+  auto results = frames::apply_controls(dev, want);
   auto r = by_name(results);
   CHECK(r["exposure"].outcome == ControlOutcome::kSet);
   CHECK(dev.value(V4L2_CID_EXPOSURE) == 80);
@@ -120,9 +120,9 @@ TEST_CASE("a driver that refuses to leave automatic mode: the manual value is re
   SECTION("auto exposure read-only") {
     FakeControlDevice dev = FakeControlDevice::uvc_webcam();
     dev.make_read_only(V4L2_CID_EXPOSURE_AUTO);
-    camera::CameraControls want;
+    frames::CameraControls want;
     want.exposure = 100;
-    auto r = by_name(camera::apply_controls(dev, want));
+    auto r = by_name(frames::apply_controls(dev, want));
     CHECK(r["auto exposure"].outcome == ControlOutcome::kRefused);
     CHECK(r["exposure"].outcome == ControlOutcome::kRefused);
     CHECK(r["exposure"].detail.find("inactive") != std::string::npos);
@@ -131,14 +131,14 @@ TEST_CASE("a driver that refuses to leave automatic mode: the manual value is re
   SECTION("no manual mode in the menu") {
     FakeControlDevice dev;
     dev.add_menu(V4L2_CID_EXPOSURE_AUTO, "Auto Exposure", {3}, 3);
-    auto r = by_name(camera::apply_controls(dev, {}));
+    auto r = by_name(frames::apply_controls(dev, {}));
     CHECK(r["auto exposure"].outcome == ControlOutcome::kRefused);
     CHECK(r["auto exposure"].detail == "the driver offers no manual mode");
   }
   SECTION("a switch the driver accepts and ignores") {
     FakeControlDevice dev = FakeControlDevice::uvc_webcam();
     dev.ignore_writes(V4L2_CID_AUTO_WHITE_BALANCE);
-    auto r = by_name(camera::apply_controls(dev, {}));
+    auto r = by_name(frames::apply_controls(dev, {}));
     CHECK(r["auto white balance"].outcome == ControlOutcome::kRefused);
     CHECK(r["auto white balance"].detail == "the driver kept 1");
   }
@@ -146,7 +146,7 @@ TEST_CASE("a driver that refuses to leave automatic mode: the manual value is re
 
 TEST_CASE("inspect_automatic says what is on, what can be locked and what is locked") {
   FakeControlDevice dev = FakeControlDevice::uvc_webcam();
-  auto before = camera::inspect_automatic(dev);
+  auto before = frames::inspect_automatic(dev);
   REQUIRE(before.size() == 4);
   for (const auto& s : before) {
     INFO(s.name << ": " << s.detail);
@@ -158,12 +158,12 @@ TEST_CASE("inspect_automatic says what is on, what can be locked and what is loc
       CHECK_FALSE(s.locked);
     }
   }
-  camera::apply_controls(dev, {});
-  for (const auto& s : camera::inspect_automatic(dev))
+  frames::apply_controls(dev, {});
+  for (const auto& s : frames::inspect_automatic(dev))
     if (s.present) CHECK(s.locked);
   FakeControlDevice stuck;
   stuck.add_menu(V4L2_CID_EXPOSURE_AUTO, "Auto Exposure", {3}, 3);
-  auto s = camera::inspect_automatic(stuck);
+  auto s = frames::inspect_automatic(stuck);
   CHECK(s[0].present);
   CHECK_FALSE(s[0].lockable);
   CHECK(s[0].matters);
@@ -171,7 +171,7 @@ TEST_CASE("inspect_automatic says what is on, what can be locked and what is loc
 
 TEST_CASE("describe_controls lists every control with its range and current value") {
   FakeControlDevice dev = FakeControlDevice::uvc_webcam();
-  auto lines = camera::describe_controls(dev);
+  auto lines = frames::describe_controls(dev);
   REQUIRE(lines.size() == 9);
   CHECK(lines[3] == "Exposure Time, Absolute [0x009a0902] int 3..2047 default 250 now 250 (inactive)");
   CHECK(lines[1].find("menu 1 3") != std::string::npos);
@@ -179,17 +179,17 @@ TEST_CASE("describe_controls lists every control with its range and current valu
 
 TEST_CASE("control flags: declared once, parsed with their ranges") {
   Flags flags("t", "t");
-  camera::add_control_flags(flags);
+  frames::add_control_flags(flags);
   const char* argv[] = {"t", "--exposure", "156", "--white-balance=4600", "--power-line-hz", "50"};
   REQUIRE(flags.parse(6, argv));
-  auto c = camera::parse_controls([&](const std::string& n) { return flags.get(n); });
+  auto c = frames::parse_controls([&](const std::string& n) { return flags.get(n); });
   CHECK(c.exposure == 156);
   CHECK(c.white_balance_k == 4600);
   CHECK(c.power_line_hz == 50);
   CHECK_FALSE(c.gain);
   CHECK_FALSE(c.all_values());
   auto parse_one = [](const std::string& name, const std::string& value) {
-    return camera::parse_controls([&](const std::string& n) { return n == name ? value : std::string(); });
+    return frames::parse_controls([&](const std::string& n) { return n == name ? value : std::string(); });
   };
   CHECK_THROWS_WITH(parse_one("exposure", "0"), Catch::Contains("--exposure must be an integer in 1..100000"));
   CHECK_THROWS_AS(parse_one("gain", "12abc"), FlagError);
@@ -199,9 +199,9 @@ TEST_CASE("control flags: declared once, parsed with their ranges") {
 }
 
 TEST_CASE("the kernel device: a missing node and a node that is not a camera are clear errors") {
-  CHECK(camera::v4l2_device_path("0") == "/dev/video0");
-  CHECK(camera::v4l2_device_path("/dev/video2") == "/dev/video2");
-  CHECK_THROWS_WITH(camera::V4l2ControlDevice("/dev/video-none"), Catch::Contains("cannot open /dev/video-none"));
+  CHECK(frames::v4l2_device_path("0") == "/dev/video0");
+  CHECK(frames::v4l2_device_path("/dev/video2") == "/dev/video2");
+  CHECK_THROWS_WITH(frames::V4l2ControlDevice("/dev/video-none"), Catch::Contains("cannot open /dev/video-none"));
   // /dev/null answers VIDIOC_QUERYCAP with ENOTTY: the real ioctl path, without a camera.
-  CHECK_THROWS_WITH(camera::V4l2ControlDevice("/dev/null"), Catch::Contains("/dev/null is not a V4L2 device"));
+  CHECK_THROWS_WITH(frames::V4l2ControlDevice("/dev/null"), Catch::Contains("/dev/null is not a V4L2 device"));
 }

@@ -13,14 +13,14 @@
 #include <optional>
 #include <vector>
 
-#include "bricklayer/camera/v4l2_device.h"
+#include "bricklayer/frames/v4l2_device.h"
 
 namespace bricklayer::test {
 
-class FakeControlDevice final : public camera::ControlDevice {
+class FakeControlDevice final : public frames::ControlDevice {
  public:
   struct Control {
-    camera::ControlInfo info;
+    frames::ControlInfo info;
     int32_t value = 0;
   };
 
@@ -66,13 +66,13 @@ class FakeControlDevice final : public camera::ControlDevice {
     return d;
   }
 
-  std::optional<camera::ControlInfo> query(uint32_t id) override {
+  std::optional<frames::ControlInfo> query(uint32_t id) override {
     auto it = controls_.find(id);
     if (it == controls_.end()) return std::nullopt;
     return it->second.info;
   }
-  std::vector<camera::ControlInfo> list() override {
-    std::vector<camera::ControlInfo> out;
+  std::vector<frames::ControlInfo> list() override {
+    std::vector<frames::ControlInfo> out;
     for (uint32_t id : order_) out.push_back(controls_.at(id).info);
     return out;
   }
@@ -86,7 +86,7 @@ class FakeControlDevice final : public camera::ControlDevice {
     writes.push_back({id, value});
     auto it = controls_.find(id);
     if (it == controls_.end()) return EINVAL;
-    camera::ControlInfo& info = it->second.info;
+    frames::ControlInfo& info = it->second.info;
     if (info.read_only() || info.inactive()) return EACCES;
     if (!info.menu.empty()) {
       if (!info.offers(value)) return EINVAL;

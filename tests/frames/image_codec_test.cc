@@ -5,7 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "bricklayer/vision/frame.h"
+#include "bricklayer/frames/image_codec.h"
 
 using namespace bricklayer;
 
@@ -39,7 +39,7 @@ TEST_CASE("JPEG frames decode to exactly the pixels cv::imdecode gives") {
       if (grey) cv::cvtColor(img, img, cv::COLOR_BGR2GRAY);
       const image_t m = jpeg_message(img, q);
       std::string error;
-      const cv::Mat ours = vision::decode_image(m, &error);
+      const cv::Mat ours = frames::decode_image(m, &error);
       const cv::Mat reference = cv::imdecode(m.data, cv::IMREAD_UNCHANGED);
       INFO(w << "x" << h << " quality " << q << (grey ? " grey" : " colour") << ": " << error);
       REQUIRE(error.empty());
@@ -56,18 +56,18 @@ TEST_CASE("a JPEG whose body is damaged or whose size disagrees with the message
   std::string error;
   image_t wrong = m;
   wrong.width = 320;
-  CHECK(vision::decode_image(wrong, &error).empty());
+  CHECK(frames::decode_image(wrong, &error).empty());
   CHECK_FALSE(error.empty());
   // Scramble the entropy-coded middle: TurboJPEG reports it, the frame then goes through cv::imdecode,
   // which either refuses it (an error) or returns what libjpeg made of it, as before.
   image_t damaged = m;
   for (size_t i = damaged.data.size() / 2; i < damaged.data.size() / 2 + 200; ++i) damaged.data[i] ^= 0x5A;
   error.clear();
-  const cv::Mat out = vision::decode_image(damaged, &error);
+  const cv::Mat out = frames::decode_image(damaged, &error);
   CHECK((out.empty() ? !error.empty() : out.size() == img.size()));
   image_t truncated = m;
   truncated.data.resize(truncated.data.size() / 2);
   error.clear();
-  CHECK(vision::decode_image(truncated, &error).empty());
+  CHECK(frames::decode_image(truncated, &error).empty());
   CHECK_FALSE(error.empty());
 }

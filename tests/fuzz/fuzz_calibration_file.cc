@@ -8,7 +8,7 @@
 #include <string>
 
 #include "bricklayer/calibration/calibration_file.h"
-#include "bricklayer/vision/detector.h"
+#include "bricklayer/detection/detector.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size > (1 << 20) + 16) return 0;
@@ -19,7 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     (void)bricklayer::calibration::parse_calibration_json(again);
     // Only small images: the detector's remap tables are sized by the calibration's camera image.
     if (static_cast<int64_t>(cal.camera_width) * cal.camera_height <= 1280 * 960) {
-      bricklayer::vision::Detector detector;
+      bricklayer::detection::Detector detector;
       try {
         detector.set_calibration(cal);
       } catch (const std::invalid_argument&) {

@@ -15,8 +15,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bricklayer/image_t.hpp"
-#include "bricklayer/vision/detector.h"
-#include "bricklayer/vision/frame.h"
+#include "bricklayer/detection/detector.h"
+#include "bricklayer/frames/image_codec.h"
 
 namespace {
 int32_t read_i32(const uint8_t* p) {
@@ -28,7 +28,7 @@ int32_t read_i32(const uint8_t* p) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1 || size > (4 << 20)) return 0;
-  static bricklayer::vision::Detector detector;  // default geometry: a 640x480 camera
+  static bricklayer::detection::Detector detector;  // default geometry: a 640x480 camera
   const uint8_t mode = data[0];
   bricklayer::image_t image{};
   if (mode % 2 == 0) {
@@ -42,7 +42,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     image.size = static_cast<int32_t>(image.data.size());
   }
   std::string error;
-  cv::Mat frame = bricklayer::vision::decode_image(image, &error);
+  cv::Mat frame = bricklayer::frames::decode_image(image, &error);
   if (frame.empty()) {
     if (error.empty()) __builtin_trap();  // every rejection must say why
     return 0;
@@ -61,7 +61,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   } else {
     detector.clear_projector_image();
   }
-  const bricklayer::vision::Detection d = detector.detect(frame);
+  const bricklayer::detection::Detection d = detector.detect(frame);
   for (const auto& b : d.blocks) {
     if (b.confidence < 0 || b.confidence > 1 || b.x != b.x) __builtin_trap();
   }

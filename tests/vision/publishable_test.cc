@@ -11,13 +11,13 @@
 #include "bricklayer/prediction/prediction_logic.h"
 #include "bricklayer/simcam/piles.h"
 #include "bricklayer/simcam/render.h"
-#include "bricklayer/vision/detector.h"
-#include "bricklayer/vision/frame.h"
+#include "bricklayer/detection/detector.h"
 #include "bricklayer/vision/publishable.h"
+#include "bricklayer/vision/stack_message.h"
 #include "bricklayer/vision/temporal_filter.h"
 
 using namespace bricklayer;
-using vision::DetectedBlock;
+using detection::DetectedBlock;
 
 namespace {
 
@@ -28,12 +28,12 @@ DetectedBlock block(int row, double x, double confidence = 0.7) {
   b.row = row;
   b.x = x;
   b.confidence = confidence;
-  vision::place_block(b, vision::BoardFrame{});
+  detection::place_block(b, detection::BoardFrame{});
   return b;
 }
 
 vision::PublishCounts publish(std::vector<DetectedBlock>& blocks) {
-  return vision::make_publishable(blocks, [](DetectedBlock& b) -> DetectedBlock& { return b; }, vision::BoardFrame{},
+  return vision::make_publishable(blocks, [](DetectedBlock& b) -> DetectedBlock& { return b; }, detection::BoardFrame{},
                                   kImage);
 }
 
@@ -44,9 +44,9 @@ int8_t prediction_status(const stack_t& stack) {
 }
 
 stack_t as_stack(const std::vector<DetectedBlock>& blocks) {
-  vision::Detection d;
+  detection::Detection d;
   d.blocks = blocks;
-  return vision::to_stack_message(d, vision::BoardFrame{}, 1, 1);
+  return vision::to_stack_message(d, detection::BoardFrame{}, 1, 1);
 }
 
 }  // namespace
@@ -106,7 +106,7 @@ TEST_CASE("soak-like piles never give a stack prediction rejects, before or afte
   options.min_gap = GENERATE(0.0, 0.02);
   options.max_gap = 0.3;
   const int level = GENERATE(0, 3);
-  vision::Detector detector;
+  detection::Detector detector;
   vision::TemporalFilter filter;
   vision::PublishCounts raw_total, filtered_total;
   int frames = 0;
@@ -117,9 +117,9 @@ TEST_CASE("soak-like piles never give a stack prediction rejects, before or afte
                                      seed * 10 + static_cast<uint64_t>(cycle));
       std::vector<uint8_t> jpeg;
       cv::imencode(".jpg", r.bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90});
-      const vision::Detection d = detector.detect(cv::imdecode(jpeg, cv::IMREAD_COLOR));
-      REQUIRE(d.status == vision::Detection::kOk);
-      raw_total += d.published;
+      detection::Detection d = detector.detect(cv::imdecode(jpeg, cv::IMREAD_COLOR));
+      REQUIRE(d.status == detection::Detection::kOk);
+      raw_total += vision::make_publishable(d.blocks, detector.frame(), r.bgr.size());
       INFO("pile " << seed << " cycle " << cycle << " level " << level << " min gap " << options.min_gap);
       CHECK(prediction_status(vision::to_stack_message(d, detector.frame(), frames, frames)) ==
             prediction_t::STATUS_OK);

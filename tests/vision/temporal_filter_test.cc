@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 using namespace bricklayer::vision;
+using bricklayer::detection::DetectedBlock;
 
 namespace {
 DetectedBlock at(int row, double x) {

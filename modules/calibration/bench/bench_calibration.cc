@@ -7,7 +7,7 @@
 // projector with the truth over a grid covering the board. Prints per method the median and p99 (over
 // setups) of the mean and max mapping error, and the median / p99 time of compute_calibration; for the
 // board frame: where the origin lands, how level the surface is, and how far board x is off along the
-// bottom row as calibrated and after the correction from blocks (vision/block_scale.h).
+// bottom row as calibrated and after the correction from blocks (detection/block_scale.h).
 //
 //   bricklayer-bench-calibration [--setups 20] [--nuisance mild] [--gray-code]
 #include <opencv2/imgproc.hpp>
@@ -24,7 +24,7 @@
 #include "bricklayer/calibration/patterns.h"
 #include "bricklayer/common/flags.h"
 #include "bricklayer/simcam/render.h"
-#include "bricklayer/vision/block_scale.h"
+#include "bricklayer/detection/block_scale.h"
 
 namespace bricklayer {
 namespace {
@@ -207,14 +207,14 @@ int Main(int argc, char** argv) {
       // standing apart on the bottom row).
       const double worst_x = board_x_error(result.calibration, camera);
       corners.board_x.push_back(worst_x);
-      vision::BlockScaleMeter meter(result.calibration);
+      detection::BlockScaleMeter meter(result.calibration);
       for (int f = 0; f < 10; ++f) meter.add(renderer.render(blocks_apart(f), nuisance, nullptr, seed * 100 + 50 + f).bgr);
       std::string why;
       const auto fit = meter.result(20, 0.01, &why);
       if (!fit) {
         std::printf("seed %d: board scale not measured: %s\n", seed, why.c_str());
       } else {
-        const double fixed = board_x_error(vision::apply_board_correction(result.calibration, *fit), camera);
+        const double fixed = board_x_error(detection::apply_board_correction(result.calibration, *fit), camera);
         corners.board_x_fixed.push_back(fixed);
         if (verbose) std::printf("seed %d: board x error %.4f, after the correction from blocks %.4f\n", seed, worst_x, fixed);
       }

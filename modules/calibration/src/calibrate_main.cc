@@ -13,7 +13,7 @@
 //                 3 when it exceeds --drift-threshold).
 //   --write-default  write the uncalibrated default setup to --output and exit.
 //   --scale-from-blocks  load --output, measure how long blocks standing apart on the bottom row read in
-//                 its board frame over --scale-frames camera frames (vision/block_scale.h: the board's
+//                 its board frame over --scale-frames camera frames (detection/block_scale.h: the board's
 //                 scale comes from the projector and is off when the projector is not mounted square),
 //                 correct the board frame (scale and keystone along the board), save and publish (exit 0),
 //                 or say what to fix (exit 1).
@@ -51,8 +51,8 @@
 #include "bricklayer/image_t.hpp"
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/stack_t.hpp"
-#include "bricklayer/vision/block_scale.h"
-#include "bricklayer/vision/frame.h"
+#include "bricklayer/detection/block_scale.h"
+#include "bricklayer/frames/image_codec.h"
 
 namespace bricklayer {
 namespace {
@@ -68,7 +68,7 @@ constexpr double kScaleCheckHalfWidth = 4.0;  // block lengths either side of th
 // decoding (a 300-byte PNG declaring 30000x30000 is refused, not a 2.7 GB allocation) and is fuzzed.
 cv::Mat decode_frame(const image_t& img) {
   std::string error;
-  cv::Mat out = vision::decode_image(img, &error);
+  cv::Mat out = frames::decode_image(img, &error);
   if (!out.empty() && out.channels() == 1) cv::cvtColor(out, out, cv::COLOR_GRAY2BGR);
   if (!error.empty()) log::debug(error);
   return out;
@@ -242,7 +242,7 @@ class Calibrate {
       log::info("loaded ", options_.output, " (reprojection error mean ", calibration_->reprojection_error_mean_px, " px)");
     }
     if (mode_ == Mode::kScale) {
-      scale_ = std::make_unique<vision::BlockScaleMeter>(*calibration_);
+      scale_ = std::make_unique<detection::BlockScaleMeter>(*calibration_);
       scale_started_s_ = monotonic_s();
       module_.set_status("measuring blocks on the bottom row");
       log::info("measuring the board scale from blocks standing apart on the bottom row (", options_.scale_frames, " frames)");
@@ -438,7 +438,7 @@ class Calibrate {
     if (++scale_frames_ < options_.scale_frames) return;
 
     std::string why;
-    const std::optional<vision::BoardCorrection> fit =
+    const std::optional<detection::BoardCorrection> fit =
         scale_->result(2 * options_.scale_frames, options_.scale_max_residual, &why);
     scale_.reset();
     if (!fit) {
@@ -464,7 +464,7 @@ class Calibrate {
       finish(0);
       return;
     }
-    calibration_t corrected = vision::apply_board_correction(*calibration_, *fit);
+    calibration_t corrected = detection::apply_board_correction(*calibration_, *fit);
     corrected.utime = wall_utime();
     try {
       cal::save_calibration(options_.output, corrected);
@@ -522,7 +522,7 @@ class Calibrate {
   double last_check_s_ = -1e9;
   double last_publish_s_ = -1e9;
   std::filesystem::file_time_type file_time_{};
-  std::unique_ptr<vision::BlockScaleMeter> scale_;
+  std::unique_ptr<detection::BlockScaleMeter> scale_;
   double scale_started_s_ = 0;
   int scale_seen_ = 0;    // frames received in --scale-from-blocks
   int scale_frames_ = 0;  // frames measured

@@ -14,8 +14,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "bricklayer/camera/camera_controls.h"
-#include "bricklayer/camera/frame_source.h"
+#include "bricklayer/frames/camera_controls.h"
+#include "bricklayer/frames/frame_source.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/flags.h"
 #include "bricklayer/common/lcm_url.h"
@@ -29,7 +29,7 @@ using namespace bricklayer;
 
 class CameraProcess {
  public:
-  CameraProcess(const std::string& url, std::unique_ptr<camera::FrameSource> source, std::string format, int quality)
+  CameraProcess(const std::string& url, std::unique_ptr<frames::FrameSource> source, std::string format, int quality)
       : module_("camera", url),
         source_(std::move(source)),
         format_(std::move(format)),
@@ -84,7 +84,7 @@ class CameraProcess {
   }
 
   Module module_;  // owns the LCM handle
-  std::unique_ptr<camera::FrameSource> source_;
+  std::unique_ptr<frames::FrameSource> source_;
   int64_t unreadable_seen_ = 0;
   std::string format_;
   int quality_;
@@ -95,7 +95,7 @@ class CameraProcess {
 
 // Sets the camera's controls; returns how many warnings it logged. Controls left unset are locked at
 // what the automatic modes chose after `settle_s` seconds of frames (they adjust only while streaming).
-int SetCameraControls(camera::FrameSource& source, const std::string& device, const camera::CameraControls& controls,
+int SetCameraControls(frames::FrameSource& source, const std::string& device, const frames::CameraControls& controls,
                       double settle_s) {
   if (!controls.all_values() && settle_s > 0) {
     log::info("letting the automatic modes settle for ", settle_s, " s before locking them");
@@ -105,9 +105,9 @@ int SetCameraControls(camera::FrameSource& source, const std::string& device, co
     }
   }
   try {
-    camera::V4l2ControlDevice dev(device);
+    frames::V4l2ControlDevice dev(device);
     int warnings = 0;
-    for (const camera::ControlResult& r : camera::apply_controls(dev, controls)) {
+    for (const frames::ControlResult& r : frames::apply_controls(dev, controls)) {
       if (r.warning()) {
         ++warnings;
         log::warn("camera control ", r.describe());
@@ -133,7 +133,7 @@ int Main(int argc, char** argv) {
   flags.add("height", "480", "camera frame height to request (0: the driver's)");
   flags.add("format", "jpeg", "frame encoding: jpeg or png");
   flags.add("jpeg-quality", "90", "JPEG quality 1..100");
-  camera::add_control_flags(flags);
+  frames::add_control_flags(flags);
   flags.add("settle-s", "2", "camera: seconds of frames before locking the automatic modes of controls left unset");
   flags.add_bool("list-controls", "print the camera's V4L2 controls (range, default, current value) and exit");
   flags.add("lcm-url", "", "LCM URL (default: LCM_DEFAULT_URL, else host-only udpm ttl=0)");
@@ -152,28 +152,28 @@ int Main(int argc, char** argv) {
   int width = static_cast<int>(flags.get_int("width")), height = static_cast<int>(flags.get_int("height"));
   if (width < 0 || height < 0 || width > 8192 || height > 8192) throw FlagError("--width/--height must be 0..8192");
 
-  const camera::CameraControls controls = camera::parse_controls([&](const std::string& name) { return flags.get(name); });
+  const frames::CameraControls controls = frames::parse_controls([&](const std::string& name) { return flags.get(name); });
   const double settle_s = flags.get_double("settle-s");
   if (settle_s < 0 || settle_s > 60) throw FlagError("--settle-s must be between 0 and 60");
   const std::string device = flags.get("device").empty() ? "0" : flags.get("device");
   if (flags.get_bool("list-controls")) {
     if (sources > 0 && flags.get("device").empty()) throw FlagError("--list-controls needs a camera (--device), not a file");
-    camera::V4l2ControlDevice dev(device);
+    frames::V4l2ControlDevice dev(device);
     std::cout << dev.describe() << "\n";
-    for (const std::string& line : camera::describe_controls(dev)) std::cout << "  " << line << "\n";
+    for (const std::string& line : frames::describe_controls(dev)) std::cout << "  " << line << "\n";
     return 0;
   }
 
   std::string url = resolve_lcm_url(flags.get("lcm-url"));
   check_lcm_url(url);
-  std::unique_ptr<camera::FrameSource> source;
+  std::unique_ptr<frames::FrameSource> source;
   int control_warnings = 0;
   if (!flags.get("video").empty()) {
-    source = camera::open_video(flags.get("video"), fps, flags.get_bool("loop"));
+    source = frames::open_video(flags.get("video"), fps, flags.get_bool("loop"));
   } else if (!flags.get("images").empty()) {
-    source = camera::open_folder(flags.get("images"), fps, flags.get_bool("loop"));
+    source = frames::open_folder(flags.get("images"), fps, flags.get_bool("loop"));
   } else {
-    source = camera::open_camera(device, width, height);
+    source = frames::open_camera(device, width, height);
     control_warnings = SetCameraControls(*source, device, controls, settle_s);
   }
   CameraProcess process(url, std::move(source), format, quality);

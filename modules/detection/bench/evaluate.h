@@ -9,9 +9,9 @@
 
 #include "bricklayer/calibration_t.hpp"
 #include "bricklayer/simcam/render.h"
-#include "bricklayer/vision/detector.h"
+#include "bricklayer/detection/detector.h"
 
-namespace bricklayer::vision::eval {
+namespace bricklayer::detection::eval {
 
 struct FrameScore {
   int truth = 0;       // visible true blocks
@@ -100,4 +100,4 @@ inline calibration_t true_calibration(const simcam::CameraSetup& cam, const simc
   return c;
 }
 
-}  // namespace bricklayer::vision::eval
+}  // namespace bricklayer::detection::eval

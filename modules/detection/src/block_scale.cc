@@ -1,11 +1,11 @@
-#include "bricklayer/vision/block_scale.h"
+#include "bricklayer/detection/block_scale.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
-namespace bricklayer::vision {
+namespace bricklayer::detection {
 
 namespace {
 
@@ -142,7 +142,7 @@ int BlockScaleMeter::add(const cv::Mat& frame) {
   // spacings with the scale being measured.
   std::vector<double> ends;
   for (const DetectedBlock& b : d.blocks)
-    if (b.row == 0) ends.insert(ends.end(), {b.left_line_px, b.right_line_px});
+    if (b.row == 0 && whole_in_view(b, frame.size())) ends.insert(ends.end(), {b.left_line_px, b.right_line_px});
   const double apart_px = kMinGap * g.block_length_px;
   auto crowded = [&](double line) {
     // Its own line is at distance 0; a block's two lines are never this close to each other.
@@ -150,7 +150,10 @@ int BlockScaleMeter::add(const cv::Mat& frame) {
   };
   int added = 0;
   for (const DetectedBlock& b : d.blocks) {
-    if (b.row != 0 || !(b.right_line_px > b.left_line_px) || crowded(b.left_line_px) || crowded(b.right_line_px)) continue;
+    // A block not whole in view was paired from a line the camera saw and one it only guessed.
+    if (b.row != 0 || !whole_in_view(b, frame.size()) || !(b.right_line_px > b.left_line_px) || crowded(b.left_line_px) ||
+        crowded(b.right_line_px))
+      continue;
     measured_.push_back({(b.left_line_px - g.edge_x_px) / g.block_length_px, (b.right_line_px - g.edge_x_px) / g.block_length_px});
     ++added;
   }
@@ -172,4 +175,4 @@ calibration_t apply_board_correction(const calibration_t& calibration, const Boa
   return out;
 }
 
-}  // namespace bricklayer::vision
+}  // namespace bricklayer::detection

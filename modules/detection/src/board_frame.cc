@@ -1,4 +1,4 @@
-#include "bricklayer/vision/board_frame.h"
+#include "bricklayer/detection/board_frame.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -7,7 +7,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
-namespace bricklayer::vision {
+namespace bricklayer::detection {
 namespace {
 
 void require_finite(const double* v, int n, const char* field) {
@@ -131,4 +131,4 @@ cv::Point2d BoardFrame::to_camera(cv::Point2d rectified) const {
   return {fx * xd + cx, fy * yd + cy};
 }
 
-}  // namespace bricklayer::vision
+}  // namespace bricklayer::detection

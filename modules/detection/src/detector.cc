@@ -1,4 +1,4 @@
-#include "bricklayer/vision/detector.h"
+#include "bricklayer/detection/detector.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,9 +6,8 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "bricklayer/vision/publishable.h"
 
-namespace bricklayer::vision {
+namespace bricklayer::detection {
 namespace {
 
 constexpr float kDarkFloor = 4.0f;  // background levels below this (0..255) carry no usable contrast
@@ -36,6 +35,30 @@ void box_filter(const float* in, float* out, int n, int radius) {
 }
 
 }  // namespace
+
+void place_block(DetectedBlock& block, const BoardFrame& frame) {
+  const BoardGeometry& g = frame.geometry();
+  block.left_px = g.edge_x_px + block.x * g.block_length_px;
+  const double bottom = g.surface_y_px - block.row * g.block_height_px, top = bottom - g.block_height_px;
+  const double right = block.left_px + g.block_length_px;
+  const cv::Point2d corners[4] = {{block.left_px, bottom}, {right, bottom}, {right, top}, {block.left_px, top}};
+  for (int c = 0; c < 4; ++c) {
+    const cv::Point2d q = frame.to_camera(corners[c]);
+    block.corner_u[c] = q.x;
+    block.corner_v[c] = q.y;
+  }
+}
+
+bool whole_in_view(const DetectedBlock& b, cv::Size image) {
+  if (!std::isfinite(b.x)) return false;
+  // Pixel centres are integers, so the image covers [-0.5, size - 0.5].
+  for (int c = 0; c < 4; ++c) {
+    if (!(b.corner_u[c] >= -0.5 && b.corner_u[c] <= image.width - 0.5 && b.corner_v[c] >= -0.5 &&
+          b.corner_v[c] <= image.height - 0.5))
+      return false;
+  }
+  return true;
+}
 
 Detector::Detector(const BoardGeometry& geometry, const DetectorConfig& config)
     : config_(config),
@@ -404,8 +427,7 @@ Detection Detector::detect(const cv::Mat& frame) {
     place_block(blk, frame_);
     out.blocks.push_back(blk);
   }
-  out.published = make_publishable(out.blocks, [](DetectedBlock& b) -> DetectedBlock& { return b; }, frame_, frame.size());
   return out;
 }
 
-}  // namespace bricklayer::vision
+}  // namespace bricklayer::detection

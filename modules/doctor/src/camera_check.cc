@@ -12,8 +12,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "bricklayer/calibration/calibration_file.h"
-#include "bricklayer/camera/camera_controls.h"
-#include "bricklayer/camera/frame_source.h"
+#include "bricklayer/frames/camera_controls.h"
+#include "bricklayer/frames/frame_source.h"
 #include "bricklayer/common/log.h"
 
 namespace bricklayer::doctor {
@@ -70,9 +70,9 @@ std::vector<std::string> processes_using(const std::string& path) {
   return out;
 }
 
-std::vector<CheckResult> check_automatic_controls(camera::ControlDevice& device, bool camera_in_use) {
+std::vector<CheckResult> check_automatic_controls(frames::ControlDevice& device, bool camera_in_use) {
   std::vector<CheckResult> out;
-  for (const camera::AutomaticState& s : camera::inspect_automatic(device)) {
+  for (const frames::AutomaticState& s : frames::inspect_automatic(device)) {
     if (!s.present) {
       out.push_back(s.matters ? CheckResult::warning(s.name, s.detail, "a camera with manual exposure and white balance (docs/hardware.md)")
                               : CheckResult::ok(s.name, s.detail));
@@ -97,21 +97,21 @@ std::vector<CheckResult> check_camera(const HostPlan& plan, const CameraCheckOpt
   if (plan.camera == Kind::kNone) return {CheckResult::ok("camera", "profile " + plan.profile + " runs no camera")};
   if (plan.camera == Kind::kSimulated) return {CheckResult::ok("camera", "the simulated camera (bricklayer-simcam)")};
 
-  const std::string what = plan.camera == Kind::kDevice ? "camera " + camera::v4l2_device_path(plan.camera_source)
+  const std::string what = plan.camera == Kind::kDevice ? "camera " + frames::v4l2_device_path(plan.camera_source)
                            : plan.camera == Kind::kVideo ? "video " + plan.camera_source
                                                          : "folder " + plan.camera_source;
   bool in_use = false;
-  std::unique_ptr<camera::V4l2ControlDevice> controls;
-  std::unique_ptr<camera::FrameSource> source;
+  std::unique_ptr<frames::V4l2ControlDevice> controls;
+  std::unique_ptr<frames::FrameSource> source;
   if (plan.camera == Kind::kDevice) {
     try {
-      controls = std::make_unique<camera::V4l2ControlDevice>(plan.camera_source);
+      controls = std::make_unique<frames::V4l2ControlDevice>(plan.camera_source);
     } catch (const std::exception& e) {
       return {CheckResult::failed("camera", e.what(), "connect the camera; list cameras with: v4l2-ctl --list-devices (package v4l-utils)")};
     }
   }
   const std::vector<std::string> users =
-      plan.camera == Kind::kDevice ? processes_using(camera::v4l2_device_path(plan.camera_source)) : std::vector<std::string>{};
+      plan.camera == Kind::kDevice ? processes_using(frames::v4l2_device_path(plan.camera_source)) : std::vector<std::string>{};
   try {
     if (!users.empty()) {
       in_use = true;
@@ -120,11 +120,11 @@ std::vector<CheckResult> check_camera(const HostPlan& plan, const CameraCheckOpt
       out.push_back(CheckResult::warning("camera", controls->describe() + " present, in use by " + list + ": size and rate not measured",
                                          "stop the exhibit and run the doctor again for the size and rate"));
     } else if (plan.camera == Kind::kDevice) {
-      source = camera::open_camera(plan.camera_source, plan.camera_width, plan.camera_height);
+      source = frames::open_camera(plan.camera_source, plan.camera_width, plan.camera_height);
     } else if (plan.camera == Kind::kVideo) {
-      source = camera::open_video(plan.camera_source, plan.camera_fps, false);
+      source = frames::open_video(plan.camera_source, plan.camera_fps, false);
     } else {
-      source = camera::open_folder(plan.camera_source, plan.camera_fps, false);
+      source = frames::open_folder(plan.camera_source, plan.camera_fps, false);
     }
   } catch (const std::exception& e) {
     if (plan.camera != Kind::kDevice) return {CheckResult::failed("camera", e.what(), "fix --video / --images of the camera module in the profile")};

@@ -101,7 +101,7 @@ HostPlan plan_host(const launcher::Profile& profile, const std::string& root, co
         throw FlagError("the profile gives --fps '" + *fps + "', not a number");
       }
     }
-    plan.controls = camera::parse_controls([&](const std::string& name) { return flag_value(cmd, "--" + name).value_or(""); });
+    plan.controls = frames::parse_controls([&](const std::string& name) { return flag_value(cmd, "--" + name).value_or(""); });
   } else if (find_program(profile, "bricklayer-simcam")) {
     plan.camera = HostPlan::CameraKind::kSimulated;
   }

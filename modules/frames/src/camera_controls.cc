@@ -1,4 +1,4 @@
-#include "bricklayer/camera/camera_controls.h"
+#include "bricklayer/frames/camera_controls.h"
 
 #include <linux/videodev2.h>
 
@@ -6,7 +6,7 @@
 #include <cstring>
 #include <sstream>
 
-namespace bricklayer::camera {
+namespace bricklayer::frames {
 namespace {
 
 struct ValueFlag {
@@ -328,4 +328,4 @@ std::vector<std::string> describe_controls(ControlDevice& device) {
   return lines;
 }
 
-}  // namespace bricklayer::camera
+}  // namespace bricklayer::frames

@@ -1,4 +1,4 @@
-#include "bricklayer/camera/frame_source.h"
+#include "bricklayer/frames/frame_source.h"
 
 #include <algorithm>
 #include <stdexcept>
@@ -8,7 +8,7 @@
 
 #include "bricklayer/common/log.h"
 
-namespace bricklayer::camera {
+namespace bricklayer::frames {
 namespace fs = std::filesystem;
 
 namespace {
@@ -129,4 +129,4 @@ std::unique_ptr<FrameSource> open_folder(const std::string& dir, double fps, boo
   return std::make_unique<FolderSource>(dir, fps, loop);
 }
 
-}  // namespace bricklayer::camera
+}  // namespace bricklayer::frames

@@ -1,15 +1,9 @@
-#include "bricklayer/vision/frame.h"
+#include "bricklayer/frames/image_codec.h"
 
-#include <cmath>
-#include <cstdio>
-#include <fstream>
-#include <iterator>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 #include <utility>
 
-#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -17,7 +11,7 @@
 #include <turbojpeg.h>
 #endif
 
-namespace bricklayer::vision {
+namespace bricklayer::frames {
 namespace {
 
 bool jpeg_complete(const std::vector<uint8_t>& d) {
@@ -187,6 +181,11 @@ cv::Mat decode_image(const image_t& image, std::string* error) {
 
 image_t encode_image(const cv::Mat& frame, int32_t format, int64_t utime, int64_t frame_number,
                      const std::string& source, int jpeg_quality) {
+  if (frame.empty() || frame.depth() != CV_8U || (frame.channels() != 1 && frame.channels() != 3))
+    throw std::invalid_argument("encode_image: needs a non-empty BGR8 or GRAY8 frame");
+  if (frame.cols > kMaxFrameSide || frame.rows > kMaxFrameSide)
+    throw std::invalid_argument("encode_image: a " + std::to_string(frame.cols) + "x" + std::to_string(frame.rows) +
+                                " frame is larger than " + std::to_string(kMaxFrameSide) + " a side");
   image_t msg{};
   msg.utime = utime;
   msg.frame_number = frame_number;
@@ -194,81 +193,35 @@ image_t encode_image(const cv::Mat& frame, int32_t format, int64_t utime, int64_
   msg.height = frame.rows;
   msg.format = format;
   msg.source = source;
-  if (format == image_t::FORMAT_JPEG) {
-    cv::imencode(".jpg", frame, msg.data, {cv::IMWRITE_JPEG_QUALITY, jpeg_quality});
-  } else if (format == image_t::FORMAT_PNG) {
-    cv::imencode(".png", frame, msg.data, {cv::IMWRITE_PNG_COMPRESSION, 1});
-  } else {
-    const cv::Mat c = frame.isContinuous() ? frame : frame.clone();
-    msg.data.assign(c.data, c.data + c.total() * c.elemSize());
+  bool ok = true;
+  switch (format) {
+    case image_t::FORMAT_JPEG:
+      if (jpeg_quality < 1 || jpeg_quality > 100) throw std::invalid_argument("encode_image: JPEG quality must be 1..100");
+      ok = cv::imencode(".jpg", frame, msg.data, {cv::IMWRITE_JPEG_QUALITY, jpeg_quality});
+      break;
+    case image_t::FORMAT_PNG:
+      ok = cv::imencode(".png", frame, msg.data);  // OpenCV's own settings, as the camera always published
+      break;
+    case image_t::FORMAT_GRAY8:
+    case image_t::FORMAT_BGR8: {
+      if (frame.channels() != (format == image_t::FORMAT_GRAY8 ? 1 : 3))
+        throw std::invalid_argument("encode_image: the frame's channels do not match the raw format");
+      const cv::Mat c = frame.isContinuous() ? frame : frame.clone();
+      msg.data.assign(c.data, c.data + c.total() * c.elemSize());
+      break;
+    }
+    default:
+      throw std::invalid_argument("encode_image: unknown format " + std::to_string(format));
   }
+  if (!ok || msg.data.empty()) throw std::runtime_error("encode_image: OpenCV could not encode the frame");
   msg.size = static_cast<int32_t>(msg.data.size());
   return msg;
 }
 
-double block_height_blocks(const BoardFrame& frame) {
-  return frame.geometry().block_height_px / frame.geometry().block_length_px;
+int32_t image_format(const std::string& name) {
+  if (name == "jpeg") return image_t::FORMAT_JPEG;
+  if (name == "png") return image_t::FORMAT_PNG;
+  throw std::invalid_argument("frame encoding must be jpeg or png, got '" + name + "'");
 }
 
-namespace {
-stack_t empty_stack(const BoardFrame& frame, int64_t utime, int64_t frame_number, int8_t status) {
-  stack_t s{};
-  s.utime = utime;
-  s.frame_number = frame_number;
-  s.block_length = 1.0;
-  s.block_height = block_height_blocks(frame);
-  s.table_edge = 0.0;
-  s.status = status;
-  s.num_blocks = 0;
-  return s;
-}
-
-block_t to_block(int64_t id, const DetectedBlock& b) {
-  block_t m{};
-  m.id = id;
-  m.row = b.row;
-  m.x = b.x;
-  for (int c = 0; c < 4; ++c) {
-    m.corner_u[c] = b.corner_u[c];
-    m.corner_v[c] = b.corner_v[c];
-  }
-  m.confidence = b.confidence;
-  return m;
-}
-}  // namespace
-
-stack_t no_frame_stack(const BoardFrame& frame, int64_t utime, int64_t frame_number) {
-  return empty_stack(frame, utime, frame_number, stack_t::STATUS_NO_FRAME);
-}
-
-stack_t to_stack_message(const Detection& detection, const BoardFrame& frame, int64_t utime, int64_t frame_number) {
-  stack_t s = empty_stack(frame, utime, frame_number, static_cast<int8_t>(detection.status));
-  for (size_t i = 0; i < detection.blocks.size(); ++i) s.blocks.push_back(to_block(static_cast<int64_t>(i), detection.blocks[i]));
-  s.num_blocks = static_cast<int32_t>(s.blocks.size());
-  return s;
-}
-
-stack_t to_stack_message(const std::vector<FilteredBlock>& blocks, const BoardFrame& frame, int64_t utime,
-                         int64_t frame_number) {
-  stack_t s = empty_stack(frame, utime, frame_number, stack_t::STATUS_OK);
-  for (const FilteredBlock& b : blocks) s.blocks.push_back(to_block(b.id, b.block));
-  s.num_blocks = static_cast<int32_t>(s.blocks.size());
-  return s;
-}
-
-std::string to_predict_json(const Detection& detection, const BoardFrame& frame) {
-  nlohmann::json j;
-  j["block_length"] = 1.0;
-  j["block_height"] = block_height_blocks(frame);
-  j["table_edge"] = 0.0;
-  j["blocks"] = nlohmann::json::array();
-  // x unrounded: rounding two touching blocks independently can make them overlap by 1e-6, which the
-  // predictor rejects.
-  for (size_t i = 0; i < detection.blocks.size(); ++i) {
-    const DetectedBlock& b = detection.blocks[i];
-    j["blocks"].push_back({{"id", static_cast<int64_t>(i)}, {"row", b.row}, {"x", b.x}});
-  }
-  return j.dump();
-}
-
-}  // namespace bricklayer::vision
+}  // namespace bricklayer::frames

@@ -1,4 +1,4 @@
-#include "bricklayer/camera/v4l2_device.h"
+#include "bricklayer/frames/v4l2_device.h"
 
 #include <fcntl.h>
 #include <linux/videodev2.h>
@@ -11,7 +11,7 @@
 #include <cstring>
 #include <stdexcept>
 
-namespace bricklayer::camera {
+namespace bricklayer::frames {
 namespace {
 
 // ioctl restarted when a signal interrupts it (the process's SIGTERM handler must not turn into a
@@ -109,4 +109,4 @@ int V4l2ControlDevice::set(uint32_t id, int32_t value) {
   return xioctl(fd_, VIDIOC_S_CTRL, &c);
 }
 
-}  // namespace bricklayer::camera
+}  // namespace bricklayer::frames

@@ -5,18 +5,13 @@
 #include <tuple>
 
 namespace bricklayer::vision {
-namespace {
 
-bool inside(const DetectedBlock& b, cv::Size image) {
-  if (!std::isfinite(b.x)) return false;
-  // Pixel centres are integers, so the image covers [-0.5, size - 0.5].
-  for (int c = 0; c < 4; ++c) {
-    if (!(b.corner_u[c] >= -0.5 && b.corner_u[c] <= image.width - 0.5 && b.corner_v[c] >= -0.5 &&
-          b.corner_v[c] <= image.height - 0.5))
-      return false;
-  }
-  return true;
-}
+using detection::BoardFrame;
+using detection::DetectedBlock;
+using detection::place_block;
+using detection::whole_in_view;
+
+namespace {
 
 // Least-squares positions of one row's blocks (sorted by x) such that each starts at least one length
 // after the previous one: with y_i = x_i - i the constraint is y non-decreasing, so the answer is the
@@ -48,25 +43,12 @@ void separate_row(const std::vector<DetectedBlock*>& row, std::vector<double>& x
 
 }  // namespace
 
-void place_block(DetectedBlock& block, const BoardFrame& frame) {
-  const BoardGeometry& g = frame.geometry();
-  block.left_px = g.edge_x_px + block.x * g.block_length_px;
-  const double bottom = g.surface_y_px - block.row * g.block_height_px, top = bottom - g.block_height_px;
-  const double right = block.left_px + g.block_length_px;
-  const cv::Point2d corners[4] = {{block.left_px, bottom}, {right, bottom}, {right, top}, {block.left_px, top}};
-  for (int c = 0; c < 4; ++c) {
-    const cv::Point2d q = frame.to_camera(corners[c]);
-    block.corner_u[c] = q.x;
-    block.corner_v[c] = q.y;
-  }
-}
-
 PublishCounts make_publishable(std::vector<DetectedBlock*>& blocks, const BoardFrame& frame, cv::Size image_size,
                                double max_snap_overlap) {
   PublishCounts counts;
   std::vector<DetectedBlock*> order;
   for (DetectedBlock* b : blocks) {
-    if (inside(*b, image_size))
+    if (whole_in_view(*b, image_size))
       order.push_back(b);
     else
       ++counts.dropped_border;
@@ -117,7 +99,7 @@ PublishCounts make_publishable(std::vector<DetectedBlock*>& blocks, const BoardF
   std::vector<DetectedBlock*> out;
   for (size_t i = 0; i < order.size(); ++i) {
     if (!keep[i]) continue;
-    if (!inside(*order[i], image_size)) {  // moved across the border (dropping never creates an overlap)
+    if (!whole_in_view(*order[i], image_size)) {  // moved across the border (dropping never creates an overlap)
       ++counts.dropped_border;
       continue;
     }

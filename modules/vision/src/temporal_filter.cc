@@ -8,6 +8,8 @@
 
 namespace bricklayer::vision {
 
+using detection::DetectedBlock;
+
 TemporalFilter::TemporalFilter(const TemporalFilterConfig& config) : config_(config) {
   if (config.confirm_window < 1 || config.confirm_window > 32 || config.confirm_hits < 1 ||
       config.confirm_hits > config.confirm_window || config.hold_frames < 0 || !(config.deadband >= 0) ||

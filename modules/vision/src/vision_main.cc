@@ -25,7 +25,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bricklayer/calibration/calibration_file.h"
-#include "bricklayer/camera/frame_source.h"
+#include "bricklayer/frames/frame_source.h"
+#include "bricklayer/frames/image_codec.h"
 #include "bricklayer/common/board.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/flags.h"
@@ -34,13 +35,18 @@
 #include "bricklayer/common/module.h"
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/timing_t.hpp"
-#include "bricklayer/vision/detector.h"
-#include "bricklayer/vision/frame.h"
+#include "bricklayer/detection/detector.h"
 #include "bricklayer/vision/publishable.h"
+#include "bricklayer/vision/stack_message.h"
 #include "bricklayer/vision/temporal_filter.h"
 
 namespace bricklayer::vision {
 namespace {
+
+using detection::DetectedBlock;
+using detection::Detection;
+using detection::Detector;
+using frames::decode_image;
 
 constexpr const char* kModuleName = "vision";
 
@@ -55,13 +61,14 @@ cv::Mat read_image_file(const std::filesystem::path& path) {
 // --images DIR --json: one predict-input line per image, no bus, no filter.
 int run_offline(const std::string& dir, Detector& detector) {
   int failures = 0;
-  for (const auto& path : camera::list_image_files(dir)) {
+  for (const auto& path : frames::list_image_files(dir)) {
     const cv::Mat frame = read_image_file(path);
     Detection d;
     if (frame.empty()) {
       d.status = Detection::kNoFrame;
     } else {
       d = detector.detect(frame);
+      make_publishable(d.blocks, detector.frame(), frame.size());
     }
     if (d.status != Detection::kOk) {
       ++failures;
@@ -77,7 +84,7 @@ int run_offline(const std::string& dir, Detector& detector) {
 class Vision {
  public:
   Vision(const std::string& url, Detector detector, const TemporalFilterConfig& filter_config, bool filter,
-         std::unique_ptr<camera::FrameSource> source, std::optional<calibration_t> calibration, bool require_calibration)
+         std::unique_ptr<frames::FrameSource> source, std::optional<calibration_t> calibration, bool require_calibration)
       : module_(kModuleName, url),
         detector_(std::move(detector)),
         filter_(filter_config),
@@ -178,6 +185,7 @@ class Vision {
       d.status = Detection::kNoFrame;
     } else {
       d = detector_.detect(frame);
+      published_ += make_publishable(d.blocks, detector_.frame(), frame.size());
     }
     stack_t out;
     if (d.status == Detection::kNoFrame) {
@@ -197,7 +205,6 @@ class Vision {
     } else {
       out = to_stack_message(d, detector_.frame(), utime, frame_number);
     }
-    published_ += d.published;
     const int64_t elapsed =
         std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - start).count();
     module_.publish(stack_channel_, out);
@@ -229,7 +236,7 @@ class Vision {
   Detector detector_;
   TemporalFilter filter_;
   bool use_filter_;
-  std::unique_ptr<camera::FrameSource> source_;
+  std::unique_ptr<frames::FrameSource> source_;
   int64_t unreadable_seen_ = 0;
   bool source_done_ = false;
   int64_t source_frames_ = 0;
@@ -303,13 +310,13 @@ int Main(int argc, char** argv) {
   const double rate = flags.get_double("rate");
   if (!(rate > 0 && rate <= 1000)) throw FlagError("--rate must be in (0, 1000]");
 
-  std::unique_ptr<camera::FrameSource> source;
+  std::unique_ptr<frames::FrameSource> source;
   if (!flags.get("camera").empty()) {
-    source = camera::open_camera(flags.get("camera"), 0, 0);
+    source = frames::open_camera(flags.get("camera"), 0, 0);
   } else if (!flags.get("video").empty()) {
-    source = camera::open_video(flags.get("video"), rate, false);
+    source = frames::open_video(flags.get("video"), rate, false);
   } else if (!flags.get("images").empty()) {
-    source = camera::open_folder(flags.get("images"), rate, false);
+    source = frames::open_folder(flags.get("images"), rate, false);
   }
 
   const std::string url = resolve_lcm_url(flags.get("lcm-url"));

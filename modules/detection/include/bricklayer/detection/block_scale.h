@@ -29,9 +29,9 @@
 #include <opencv2/core.hpp>
 
 #include "bricklayer/calibration_t.hpp"
-#include "bricklayer/vision/detector.h"
+#include "bricklayer/detection/detector.h"
 
-namespace bricklayer::vision {
+namespace bricklayer::detection {
 
 inline constexpr double kMaxScaleError = 0.25;  // largest measurable |block length read - 1|
 inline constexpr double kMinGap = 0.1;          // block lengths between a measured block's end lines and any other
@@ -87,4 +87,4 @@ class BlockScaleMeter {
 // C = [a 0 0; 0 a 0; c 0 1]. Throws std::invalid_argument unless scale > 0 and both are finite.
 calibration_t apply_board_correction(const calibration_t& calibration, const BoardCorrection& correction);
 
-}  // namespace bricklayer::vision
+}  // namespace bricklayer::detection

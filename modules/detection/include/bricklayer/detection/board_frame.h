@@ -15,7 +15,7 @@
 #include "bricklayer/calibration_t.hpp"
 #include "bricklayer/common/board.h"
 
-namespace bricklayer::vision {
+namespace bricklayer::detection {
 
 class BoardFrame {
  public:
@@ -53,4 +53,4 @@ class BoardFrame {
   cv::Mat map1_, map2_;  // fixed-point remap tables (CV_16SC2 + CV_16UC1)
 };
 
-}  // namespace bricklayer::vision
+}  // namespace bricklayer::detection

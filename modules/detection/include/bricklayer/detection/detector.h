@@ -7,9 +7,11 @@
 //   centroids -> reject wide dips (out-of-focus hands and bodies), dips missing from one half of the
 //   band (not a full-height line) and dips much fainter than the frame's median line (shadow-edge
 //   slopes, leakage residue) -> pair lines one block length apart (a line may end one block and start
-//   the next when blocks touch) -> block x from the pair's midpoint, row from the band -> the publishing
-//   rules of publishable.h (no overlaps in a row, nothing cut by the image border).
+//   the next when blocks touch) -> block x from the pair's midpoint, row from the band.
 // Pure function of (frame, calibration, projector image): deterministic, no state between frames.
+// What a stage then makes of the blocks is its own: bricklayer-vision's publishing rules (no overlaps in
+// a row, nothing cut by the image border) and temporal filter, the block-scale measurement's choice of
+// blocks standing apart (block_scale.h).
 #pragma once
 
 #include <array>
@@ -20,9 +22,9 @@
 
 #include "bricklayer/calibration_t.hpp"
 #include "bricklayer/common/board.h"
-#include "bricklayer/vision/board_frame.h"
+#include "bricklayer/detection/board_frame.h"
 
-namespace bricklayer::vision {
+namespace bricklayer::detection {
 
 struct DetectorConfig {
   double min_depth = 0.10;         // line darkness needed, as a fraction of the local background (0..1)
@@ -52,18 +54,6 @@ struct DetectedBlock {
   double left_line_px = 0.0, right_line_px = 0.0;
 };
 
-// What make_publishable (publishable.h) changed so a stack is one prediction accepts.
-struct PublishCounts {
-  int moved = 0;            // blocks moved (by at most kMaxSnapOverlap) so touching blocks do not overlap
-  int dropped_overlap = 0;  // blocks dropped for overlapping a better-supported block by more than that
-  int dropped_border = 0;   // blocks not whole inside the camera image (or with a non-finite position)
-
-  PublishCounts& operator+=(const PublishCounts& o) {
-    moved += o.moved, dropped_overlap += o.dropped_overlap, dropped_border += o.dropped_border;
-    return *this;
-  }
-};
-
 struct Detection {
   enum Status { kOk = 0, kNoFrame = 1, kNoBoard = 2 };
   Status status = kOk;
@@ -71,13 +61,19 @@ struct Detection {
   int lines = 0;                      // accepted line profiles
   int rejected_wide = 0;              // dark dips rejected as out of focus
   int rejected_faint = 0;             // dips much fainter than the frame's typical line (shadow edges, noise)
-  PublishCounts published;            // blocks moved or dropped so prediction accepts the stack
   struct Line {
     int row;
     double x_px, depth;  // centroid in the rectified frame; darkness relative to the background
   };
   std::vector<Line> line_list;        // every accepted line (only with DetectorConfig::keep_lines)
 };
+
+// Sets left_px and the camera-pixel corners of a block from its row and x.
+void place_block(DetectedBlock& block, const BoardFrame& frame);
+
+// Whether a block lies whole inside a camera image of this size (and has a finite position): a block cut
+// by the border was paired from a line the camera saw and one it only guessed, or its row band is cut off.
+bool whole_in_view(const DetectedBlock& block, cv::Size image_size);
 
 class Detector {
  public:
@@ -125,4 +121,4 @@ class Detector {
   std::vector<float> full_, bg_, mx_, d_, du_, dl_;
 };
 
-}  // namespace bricklayer::vision
+}  // namespace bricklayer::detection

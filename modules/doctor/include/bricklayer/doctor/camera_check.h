@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "bricklayer/camera/v4l2_device.h"
+#include "bricklayer/frames/v4l2_device.h"
 #include "bricklayer/doctor/check.h"
 #include "bricklayer/doctor/host_plan.h"
 
@@ -27,6 +27,6 @@ std::vector<std::string> processes_using(const std::string& path);
 
 // One line per automatic mode. camera_in_use: a capture is running (bricklayer-camera), so an
 // automatic mode found on was not locked by it.
-std::vector<CheckResult> check_automatic_controls(camera::ControlDevice& device, bool camera_in_use);
+std::vector<CheckResult> check_automatic_controls(frames::ControlDevice& device, bool camera_in_use);
 
 }  // namespace bricklayer::doctor

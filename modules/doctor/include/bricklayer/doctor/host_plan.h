@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "bricklayer/camera/camera_controls.h"
+#include "bricklayer/frames/camera_controls.h"
 #include "bricklayer/launcher/profile.h"
 
 namespace bricklayer::doctor {
@@ -34,7 +34,7 @@ struct HostPlan {
   std::string camera_source;  // device, video file or folder (absolute)
   int camera_width = 640, camera_height = 480;  // 0 = the driver's
   double camera_fps = 0;                        // --fps (files); 0 = the source's own
-  camera::CameraControls controls;
+  frames::CameraControls controls;
 
   // bricklayer-calibrate --serve / vision --require-calibration
   std::string calibration_file;  // absolute; empty when the profile uses none

@@ -13,10 +13,10 @@
 #include <string>
 #include <vector>
 
-#include "bricklayer/camera/v4l2_device.h"
+#include "bricklayer/frames/v4l2_device.h"
 #include "bricklayer/common/flags.h"
 
-namespace bricklayer::camera {
+namespace bricklayer::frames {
 
 // What the profile asks for; an empty value keeps what the driver has now (locked there when the
 // control has an automatic mode).
@@ -76,4 +76,4 @@ std::vector<AutomaticState> inspect_automatic(ControlDevice& device);
 // `bricklayer-camera --list-controls` when choosing the profile's values.
 std::vector<std::string> describe_controls(ControlDevice& device);
 
-}  // namespace bricklayer::camera
+}  // namespace bricklayer::frames

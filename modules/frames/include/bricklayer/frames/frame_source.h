@@ -10,7 +10,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace bricklayer::camera {
+namespace bricklayer::frames {
 
 class FrameSource {
  public:
@@ -42,4 +42,4 @@ std::unique_ptr<FrameSource> open_folder(const std::string& dir, double fps, boo
 // The image files of dir in name order.
 std::vector<std::filesystem::path> list_image_files(const std::string& dir);
 
-}  // namespace bricklayer::camera
+}  // namespace bricklayer::frames

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace bricklayer::camera {
+namespace bricklayer::frames {
 
 struct ControlInfo {
   uint32_t id = 0;
@@ -65,4 +65,4 @@ class V4l2ControlDevice final : public ControlDevice {
   int fd_ = -1;
 };
 
-}  // namespace bricklayer::camera
+}  // namespace bricklayer::frames

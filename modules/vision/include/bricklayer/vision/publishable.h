@@ -14,8 +14,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "bricklayer/vision/board_frame.h"
-#include "bricklayer/vision/detector.h"
+#include "bricklayer/detection/board_frame.h"
+#include "bricklayer/detection/detector.h"
 
 namespace bricklayer::vision {
 
@@ -23,20 +23,29 @@ namespace bricklayer::vision {
 // p95 of 0.002 and a worst case of ~0.03 at the harsh level; the filter's deadband adds 0.01 per block).
 inline constexpr double kMaxSnapOverlap = 0.1;
 
-// Sets left_px and the camera-pixel corners of a block from its row and x.
-void place_block(DetectedBlock& block, const BoardFrame& frame);
+// What make_publishable changed so a stack is one prediction accepts.
+struct PublishCounts {
+  int moved = 0;            // blocks moved (by at most kMaxSnapOverlap) so touching blocks do not overlap
+  int dropped_overlap = 0;  // blocks dropped for overlapping a better-supported block by more than that
+  int dropped_border = 0;   // blocks not whole inside the camera image (or with a non-finite position)
+
+  PublishCounts& operator+=(const PublishCounts& o) {
+    moved += o.moved, dropped_overlap += o.dropped_overlap, dropped_border += o.dropped_border;
+    return *this;
+  }
+};
 
 // Applies the rules to `blocks` in place, keeping the input's order (moving never reorders a row) and
-// returning what changed (PublishCounts, detector.h). `image_size` is the camera frame's size. Blocks that
-// move get their pixel geometry recomputed through `frame`.
-PublishCounts make_publishable(std::vector<DetectedBlock*>& blocks, const BoardFrame& frame, cv::Size image_size,
-                               double max_snap_overlap = kMaxSnapOverlap);
+// returning what changed. `image_size` is the camera frame's size. Blocks that move get their pixel
+// geometry recomputed through `frame`.
+PublishCounts make_publishable(std::vector<detection::DetectedBlock*>& blocks, const detection::BoardFrame& frame,
+                               cv::Size image_size, double max_snap_overlap = kMaxSnapOverlap);
 
-// Convenience for containers of blocks or of anything holding one (get(item) -> DetectedBlock&).
+// Convenience for containers of blocks or of anything holding one (get(item) -> detection::DetectedBlock&).
 template <class T, class Get>
-PublishCounts make_publishable(std::vector<T>& items, Get get, const BoardFrame& frame, cv::Size image_size,
-                               double max_snap_overlap = kMaxSnapOverlap) {
-  std::vector<DetectedBlock*> blocks;
+PublishCounts make_publishable(std::vector<T>& items, Get get, const detection::BoardFrame& frame,
+                               cv::Size image_size, double max_snap_overlap = kMaxSnapOverlap) {
+  std::vector<detection::DetectedBlock*> blocks;
   blocks.reserve(items.size());
   for (T& item : items) blocks.push_back(&get(item));
   const PublishCounts counts = make_publishable(blocks, frame, image_size, max_snap_overlap);
@@ -47,6 +56,13 @@ PublishCounts make_publishable(std::vector<T>& items, Get get, const BoardFrame&
     if (next < blocks.size() && &get(item) == blocks[next]) kept.push_back(std::move(item)), ++next;
   items = std::move(kept);
   return counts;
+}
+
+// A detection's own blocks, as bricklayer-vision applies the rules to every frame it detects.
+inline PublishCounts make_publishable(std::vector<detection::DetectedBlock>& blocks, const detection::BoardFrame& frame,
+                                      cv::Size image_size) {
+  return make_publishable(blocks, [](detection::DetectedBlock& b) -> detection::DetectedBlock& { return b; }, frame,
+                          image_size);
 }
 
 }  // namespace bricklayer::vision

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "bricklayer/vision/detector.h"
+#include "bricklayer/detection/detector.h"
 
 namespace bricklayer::vision {
 
@@ -22,7 +22,7 @@ struct TemporalFilterConfig {
 
 struct FilteredBlock {
   int64_t id = 0;
-  DetectedBlock block;  // published geometry (x within the deadband of the latest measurement)
+  detection::DetectedBlock block;  // published geometry (x within the deadband of the latest measurement)
   int missed = 0;       // consecutive frames without a measurement (0 = seen in this frame)
 };
 
@@ -31,13 +31,13 @@ class TemporalFilter {
   explicit TemporalFilter(const TemporalFilterConfig& config = {});
 
   // Feeds one frame's detection; returns the confirmed blocks, bottom row first, left to right.
-  std::vector<FilteredBlock> update(const std::vector<DetectedBlock>& detections);
+  std::vector<FilteredBlock> update(const std::vector<detection::DetectedBlock>& detections);
   void reset();
 
  private:
   struct Track {
     int64_t id;
-    DetectedBlock published;
+    detection::DetectedBlock published;
     uint32_t history = 0;  // bit k: seen k frames ago
     int missed = 0;
     bool confirmed = false;
