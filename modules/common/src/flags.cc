@@ -26,6 +26,11 @@ void Flags::add_positional(const std::string& name, const std::string& help, boo
   if (required) ++required_positionals_;
 }
 
+void Flags::add_positional_list(const std::string& name, const std::string& help) {
+  add_positional(name + "...", help, true);
+  positional_list_ = true;
+}
+
 bool Flags::parse(int argc, const char* const* argv) {
   bool only_positional = false;
   for (int i = 1; i < argc; ++i) {
@@ -65,7 +70,7 @@ bool Flags::parse(int argc, const char* const* argv) {
     throw FlagError("expected " + std::to_string(required_positionals_) + " argument(s), got " +
                     std::to_string(positional_.size()) + " (see --help)");
   }
-  if (positional_.size() > positional_specs_.size()) {
+  if (!positional_list_ && positional_.size() > positional_specs_.size()) {
     throw FlagError("unexpected argument '" + positional_[positional_specs_.size()] + "' (see --help)");
   }
   return true;

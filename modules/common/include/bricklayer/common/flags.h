@@ -23,6 +23,8 @@ class Flags {
   void add(const std::string& name, const std::string& default_value, const std::string& help);
   void add_bool(const std::string& name, const std::string& help);
   void add_positional(const std::string& name, const std::string& help, bool required = true);
+  // The last positional argument: one or more values ("LOG..."), all in positional().
+  void add_positional_list(const std::string& name, const std::string& help);
 
   // Parses argv; returns false when --help was given (help already printed to stdout).
   // Throws FlagError on unknown flags, missing values or missing positional arguments.
@@ -48,6 +50,7 @@ class Flags {
   std::vector<std::string> order_;
   std::vector<std::pair<std::string, std::string>> positional_specs_;
   size_t required_positionals_ = 0;
+  bool positional_list_ = false;
   std::map<std::string, std::string> values_;
   std::vector<std::string> positional_;
 };
