@@ -15,9 +15,10 @@ std::string ReadSummary::describe() const {
 }
 
 ReadSummary read_decoded(const std::vector<std::string>& files, const LcmTypeSet& types,
-                         const std::function<void(const DecodedEvent&)>& on_event, const std::string& progress_program) {
+                         const std::function<void(const DecodedEvent&)>& on_event, const std::string& progress_program,
+                         double progress_seconds) {
   LogSource source(files);
-  Progress progress(progress_program, source.total_bytes(), !progress_program.empty());
+  Progress progress(progress_program, source.total_bytes(), !progress_program.empty(), progress_seconds);
   ReadSummary summary;
   LogEvent event;
   std::string error;

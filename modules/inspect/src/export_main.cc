@@ -32,6 +32,7 @@ int Main(int argc, char** argv) {
   flags.add("node", "node", "the Node.js program that runs the MCAP writer");
   flags.add("mcap-js", default_mcap_js_dir(), "folder of the MCAP writer script and its node_modules");
   flags.add_bool("quiet", "no progress lines");
+  flags.add("progress-seconds", "2", "seconds between progress lines (shown once a run takes that long)");
   if (!flags.parse(argc, argv)) return 0;
   std::vector<std::string> logs = flags.positional();
   if (flags.get("csv").empty() && flags.get("jsonl").empty() && flags.get("mcap").empty())
@@ -61,7 +62,8 @@ int Main(int argc, char** argv) {
           if (jsonl) jsonl->add(e);
           if (mcap) mcap->add(e);
         },
-        flags.get_bool("quiet") ? "" : "bricklayer-export");
+        flags.get_bool("quiet") ? "" : "bricklayer-export",
+        flags.get_double("progress-seconds"));
   } catch (const LogOpenError& e) {
     failure = e.what();
   } catch (const std::runtime_error& e) {

@@ -136,6 +136,7 @@ void McapExport::emit_images(const DecodedEvent& e, const LcmStruct& type, const
     int32_t format = value.at("format").get<int32_t>();
     const auto& bytes = value.at("data").get_binary();
     int64_t utime = value.at("utime").get<int64_t>();
+    if (utime <= 0) utime = e.event.timestamp_us;
     std::string source = value.at("source").get<std::string>();
     Json header = {{"t", ns_text(utime)}, {"p", ns_text(e.event.timestamp_us)}, {"sec", utime / 1000000},
                    {"nsec", (utime % 1000000) * 1000}, {"frame_id", source.empty() ? e.event.channel : source}};
@@ -201,9 +202,11 @@ void McapExport::add(const DecodedEvent& e) {
   }
   const LcmStruct& type = *e.type;
   int c = channel_for(e.event.channel, type.full_name(), Json{{"name", type.full_name()}, {"schema", json_schema(types_, type)}});
-  int64_t log_time = e.message->contains("utime") && e.message->at("utime").is_number_integer()
-                         ? e.message->at("utime").get<int64_t>()
-                         : e.event.timestamp_us;
+  // The message's own time; a message without one (or with 0: a tool that left it unset) takes the
+  // logger's receive time, so it does not land at 1970 on the timeline.
+  int64_t log_time = e.event.timestamp_us;
+  if (e.message->contains("utime") && e.message->at("utime").is_number_integer() && e.message->at("utime").get<int64_t>() > 0)
+    log_time = e.message->at("utime").get<int64_t>();
   std::string text = mcap_json(types_, type, *e.message).dump(-1, ' ', false, Json::error_handler_t::replace);
   send('M', Json{{"c", c}, {"s", sequences_[c]++}, {"t", ns_text(log_time)}, {"p", ns_text(e.event.timestamp_us)}},
        text.data(), text.size());

@@ -6,14 +6,14 @@
 
 namespace bricklayer::inspect {
 
-Progress::Progress(std::string program, uint64_t total_bytes, bool enabled)
+Progress::Progress(std::string program, uint64_t total_bytes, bool enabled, double interval_s)
     : program_(std::move(program)), total_(total_bytes), enabled_(enabled), tty_(::isatty(2) == 1),
-      start_(Clock::now()), last_(start_) {}
+      interval_(interval_s), start_(Clock::now()), last_(start_) {}
 
 void Progress::update(uint64_t done) {
   if (!enabled_) return;
   auto now = Clock::now();
-  if (now - last_ < std::chrono::seconds(2)) return;
+  if (now - last_ < interval_) return;
   last_ = now;
   double elapsed = std::chrono::duration<double>(now - start_).count();
   double rate = elapsed > 0 ? static_cast<double>(done) / elapsed : 0;

@@ -32,10 +32,11 @@ struct ReadSummary {
   std::string describe() const;
 };
 
-// Reads every event of `files`; `progress_program` non-empty shows progress under that name.
+// Reads every event of `files`; `progress_program` non-empty shows progress under that name, a line
+// every `progress_seconds` once the run has taken that long.
 // Throws LogOpenError when a file cannot be opened; damage inside files is in the summary.
 ReadSummary read_decoded(const std::vector<std::string>& files, const LcmTypeSet& types,
                          const std::function<void(const DecodedEvent&)>& on_event,
-                         const std::string& progress_program = "");
+                         const std::string& progress_program = "", double progress_seconds = 2.0);
 
 }  // namespace bricklayer::inspect

@@ -4,7 +4,7 @@
 // memory flat whatever the log's size):
 // - every message as JSON on a topic named after its channel, with a JSON Schema generated from its
 //   .lcm definition (json_schema.h); log time = the message's utime, publish time = the logger's
-//   receive time (both the receive time when a message has no utime);
+//   receive time (both the receive time when a message has no utime or leaves it 0);
 // - the bytes of every image_t (camera frames, the projector's image inside projector_state_t) on
 //   CHANNEL/image as foxglove.CompressedImage (JPEG, PNG) or foxglove.RawImage (GRAY8, BGR8);
 // - messages that could not be decoded on their channel under the schema bricklayer.undecoded, with
