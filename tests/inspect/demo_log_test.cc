@@ -432,12 +432,16 @@ TEST_CASE("a torn or corrupt log gives a clear error after everything readable w
   CHECK(fs::exists(dir / "torn-report/index.html"));
   CHECK_THAT(slurp(dir / "torn-report/index.html"), Catch::Contains("The log is damaged"));
 
-  // Corrupt: 64 bytes in the middle overwritten. The events around them are read.
+  // Corrupt: 64 bytes overwritten from the first event header past the middle of the file (bytes
+  // inside a JPEG would go unnoticed: they are opaque). The events around them are read.
   fs::path corrupt = dir / "corrupt.lcmlog";
   fs::copy_file(kDemoLog, corrupt);
   {
+    std::string bytes = slurp(corrupt);
+    size_t at = bytes.find("\xED\xA1\xDA\x01", bytes.size() / 2);
+    REQUIRE(at != std::string::npos);
     std::fstream f(corrupt, std::ios::in | std::ios::out | std::ios::binary);
-    f.seekp(static_cast<std::streamoff>(fs::file_size(corrupt) / 2));
+    f.seekp(static_cast<std::streamoff>(at));
     f.write(std::string(64, '\x5a').data(), 64);
   }
   Run c = run({kBin + "bricklayer-export", corrupt.string(), "--jsonl", (dir / "corrupt-jsonl").string()}, dir);
