@@ -48,6 +48,24 @@ TEST_CASE("flags reject unknown flags, missing values and missing arguments with
   CHECK_THROWS_WITH(k.get_int("rate"), Catch::Contains("expects an integer"));
 }
 
+TEST_CASE("a positional list takes one or more values, and only one positional takes none more") {
+  Flags f("prog", "reads logs");
+  f.add("out", "", "folder");
+  f.add_positional_list("LOG", "log files");
+  const char* argv[] = {"prog", "a.0", "--out", "dir", "a.1", "a.2"};
+  REQUIRE(f.parse(6, argv));
+  CHECK(f.positional() == std::vector<std::string>{"a.0", "a.1", "a.2"});
+  CHECK(f.get("out") == "dir");
+  CHECK_THAT(f.help(), Catch::Contains("LOG..."));
+  Flags none("prog", "reads logs");
+  none.add_positional_list("LOG", "log files");
+  const char* empty[] = {"prog"};
+  CHECK_THROWS_WITH(none.parse(1, empty), Catch::Contains("expected 1 argument"));
+  Flags single = make();
+  const char* two[] = {"prog", "a", "b"};
+  CHECK_THROWS_WITH(single.parse(3, two), Catch::Contains("unexpected argument 'b'"));
+}
+
 TEST_CASE("--help prints usage and asks the caller to exit") {
   Flags f = make();
   const char* argv[] = {"prog", "--help"};

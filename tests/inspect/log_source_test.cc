@@ -1,6 +1,6 @@
-// The log reader on logs written by LCM's own writer (lcm::LogFile), whole and damaged: a torn last
-// event is reported as truncated, bytes that are no event as corrupt, and every intact event around
-// them is still read.
+// The exporters' log source (the runtime's LogReader per file, chained) on logs written by LCM's own
+// writer (lcm::LogFile), whole and damaged: a torn last event is reported as truncated, bytes that are
+// no event as corrupt, every intact event around them is still read, and split files read in order.
 #include <catch2/catch.hpp>
 
 #include <lcm/lcm-cpp.hpp>
@@ -80,7 +80,8 @@ TEST_CASE("a torn last event is reported as truncated, and the events before it 
   LogSource src2({header_only.string()});
   CHECK(read_all(src2).size() == 9);
   REQUIRE(src2.problems().size() == 1);
-  CHECK_THAT(src2.problems()[0].what, Catch::Contains("inside its header"));
+  CHECK(src2.problems()[0].truncated);
+  CHECK_THAT(src2.problems()[0].what, Catch::Contains("truncated"));
 }
 
 TEST_CASE("corrupt bytes in the middle are skipped to the next event and reported") {
@@ -121,5 +122,5 @@ TEST_CASE("several files are read in order, and a missing one is an error at onc
   LogSource junk({(temp_dir() / "garbage").string()});
   CHECK(read_all(junk).empty());
   REQUIRE(junk.problems().size() == 1);
-  CHECK_THAT(junk.problems()[0].what, Catch::Contains("nothing readable"));
+  CHECK(junk.problems()[0].offset == 0);
 }

@@ -2,7 +2,7 @@
 // and says what a person would see: console messages and page errors, and for every plot whether its
 // image decoded and how many of its pixels are coloured (data: gnuplot draws axes and text in black
 // and grey, the data in colour). Optionally saves a screenshot.
-// Usage: node page_check.mjs PAGE.html [--screenshot OUT.png] [--chromium /usr/bin/chromium]
+// Usage: node page_check.mjs PAGE.html [--screenshot OUT.png [--full-page]] [--chromium /usr/bin/chromium]
 // Prints one JSON object on stdout; exits 2 when the browser cannot be started or the page not opened.
 import { pathToFileURL } from "node:url";
 import { chromium } from "playwright-core";
@@ -62,7 +62,7 @@ try {
   });
   result.tables = await page.evaluate(() => [...document.querySelectorAll("table")].map((t) => ({ id: t.id, rows: t.tBodies[0]?.rows.length ?? 0 })));
   const shot = option("--screenshot");
-  if (shot) await page.screenshot({ path: shot, fullPage: false });
+  if (shot) await page.screenshot({ path: shot, fullPage: args.includes("--full-page") });
 } catch (e) {
   console.error(`page_check: ${e.message}`);
   await browser.close();

@@ -1,15 +1,18 @@
-// Reads the events of one or more standard LCM log files in order, and says where a file is damaged.
-// lcm::LogFile cannot tell a truncated file from its end, and silently skips damaged bytes; the
-// exporters must report both, so they read through this one class (a thin reader of LCM's documented
-// event format: sync word 0xEDA1DA01, event number, timestamp, channel length, data length, channel,
-// data; all big-endian).
+// Reads the events of one or more standard LCM log files in order, and says where a file is damaged:
+// the runtime's LogReader (bricklayer/runtime/log_file.h) reads each file without trusting its bytes
+// and reports every region that held no intact event; this class chains the files of a split log or a
+// day, keeps count of the bytes for progress, and turns the regions into problems for the operator.
 #pragma once
 
 #include <cstdint>
-#include <cstdio>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+namespace bricklayer::runtime {
+class LogReader;
+}
 
 namespace bricklayer::inspect {
 
@@ -43,9 +46,8 @@ class LogSource {
   LogSource(const LogSource&) = delete;
   LogSource& operator=(const LogSource&) = delete;
 
-  // The next event of all files in order; false when every file is read. After a corrupt stretch the
-  // reader continues at the next sync word (as LCM does), after a torn event with the next file;
-  // both are recorded in problems().
+  // The next event of all files in order; false when every file is read. A damaged region is skipped
+  // (reading goes on at the next intact event) and recorded in problems().
   bool next(LogEvent& event);
 
   uint64_t bytes_read() const { return done_bytes_ + position_; }
@@ -54,19 +56,16 @@ class LogSource {
   const std::vector<LogProblem>& problems() const { return problems_; }
 
  private:
-  bool open_next();
-  bool read_exact(void* out, size_t n);
-  bool resync(uint64_t from);
-  void problem(uint64_t offset, bool truncated, std::string what);
+  void take_damage();
 
   std::vector<std::string> files_;
   std::vector<uint64_t> sizes_;
   uint64_t total_bytes_ = 0;
   uint64_t done_bytes_ = 0;
-  size_t current_ = 0;
-  bool opened_ = false;
-  std::FILE* file_ = nullptr;
   uint64_t position_ = 0;
+  size_t current_ = 0;
+  size_t damage_seen_ = 0;
+  std::unique_ptr<runtime::LogReader> reader_;
   std::vector<LogProblem> problems_;
 };
 
