@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -220,6 +221,10 @@ TEST_CASE("pandas reads every CSV as it is and recomputes the report's numbers f
   CHECK(restarts == 1);
   CHECK(errors >= 3);
   CHECK(report.at("disk").at("bytes").get<uint64_t>() == fs::file_size(kDemoLog));
+  // The fixture's study sessions: two conditions counted, the aborted session left out.
+  REQUIRE(report.contains("study"));
+  CHECK(report.at("study").at("rows").size() == 2);
+  CHECK(report.at("study").at("excluded").size() == 1);
 
   Run check = run({"/usr/bin/python3", std::string(BRICKLAYER_SOURCE_DIR) + "/tests/inspect/report_from_csv.py",
                    (dir / "csv").string(), (dir / "report/report.json").string()},
@@ -299,6 +304,12 @@ TEST_CASE("every MCAP message round-trips through the reference reader") {
     } else if (node_config_t nc; decode(ev, nc)) {
       m["log_time_ns"] = nc.utime > 0 ? std::to_string(nc.utime) + "000" : m["publish_time_ns"].get<std::string>();
       m["fields"] = {{"module", nc.module}};
+    } else if (generated_type(ev) && ev.data.size() >= 16) {
+      // Another generated type (the study messages): every one starts with its int64 utime.
+      int64_t utime = 0;
+      for (size_t i = 8; i < 16; ++i) utime = (utime << 8) | ev.data[i];
+      m["log_time_ns"] = utime > 0 ? std::to_string(utime) + "000" : m["publish_time_ns"].get<std::string>();
+      m["fields"] = {{"utime", utime}};
     } else {
       m["log_time_ns"] = m["publish_time_ns"];
       m["undecoded_bytes"] = ev.data.size();
@@ -393,7 +404,13 @@ TEST_CASE("the report page loads in Chromium with no console errors and its plot
   }
   CHECK(fs::file_size(shot) > 10000);
   // Every table has rows; the page refers to nothing outside itself.
-  for (const auto& t : result.at("tables")) CHECK(t.at("rows").get<int>() > 0);
+  std::set<std::string> tables;
+  for (const auto& t : result.at("tables")) {
+    CHECK(t.at("rows").get<int>() > 0);
+    tables.insert(t.at("id").get<std::string>());
+  }
+  CHECK(tables.count("table-study"));
+  CHECK(tables.count("table-study-tests"));
   std::string html = slurp(dir / "report/index.html");
   CHECK(html.find("src=\"data:image/png;base64,") != std::string::npos);
   CHECK(html.find("src=\"http") == std::string::npos);

@@ -2,11 +2,14 @@
 // namespace): the real launcher with the real logger, simcam, vision, prediction and projection
 // playing a 7-second scenario built for the report: a pile that turns red and falls, one that turns
 // red and is fixed, two rounds (START_ROUND over the bus, 2-second rounds), three malformed stacks
-// (counted as errors), and the prediction process killed once (restarted by the launcher).
+// (counted as errors), the prediction process killed once (restarted by the launcher), and the study
+// messages of three finished sessions and an aborted one, as the study session driver publishes them
+// (the driver itself is not written yet; the report's study tables come from these messages).
 // Usage: inspect_record_demo_log OUT_DIR   (writes OUT_DIR/demo.lcmlog; exit 0 when it holds all of it)
 #include <lcm/lcm-cpp.hpp>
 #include <signal.h>
 
+#include <array>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +21,9 @@
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/image_t.hpp"
 #include "bricklayer/launcher/process.h"
+#include "bricklayer/study_answer_t.hpp"
+#include "bricklayer/study_session_t.hpp"
+#include "bricklayer/study_trial_t.hpp"
 
 using namespace bricklayer;
 using namespace std::chrono_literals;
@@ -56,6 +62,50 @@ void command(lcm::LCM& bus, int32_t what) {
   c.command = what;
   c.sequence = what;
   bus.publish("BL_COMMAND", &c);
+}
+
+// One study session's results: its state (done or aborted), both trials, the three answers.
+void study_session(lcm::LCM& bus, const std::string& id, const std::string& subject, int8_t condition, bool aborted,
+                   int32_t trial1, int32_t trial2, const std::array<int8_t, 3>& outcomes) {
+  int64_t utime = 1796000000000000;
+  for (int8_t trial = 1; trial <= 2; ++trial) {
+    study_trial_t t{};
+    t.utime = ++utime;
+    t.session_id = id;
+    t.subject_id = subject;
+    t.condition = condition;
+    t.trial = trial;
+    t.attempt = 1;
+    t.duration_ms = 120000;
+    t.score = trial == 1 ? trial1 : trial2;
+    t.num_blocks = 4;
+    bus.publish("BL_STUDY_TRIAL", &t);
+  }
+  for (int8_t problem = 1; problem <= 3; ++problem) {
+    study_answer_t a{};
+    a.utime = ++utime;
+    a.session_id = id;
+    a.subject_id = subject;
+    a.condition = condition;
+    a.problem = problem;
+    a.name = "problem-" + std::to_string(problem);
+    a.attempt = 1;
+    a.outcome = outcomes[static_cast<size_t>(problem - 1)];
+    a.stands = a.outcome != study_answer_t::OUTCOME_FAILED;
+    a.minimum_added = problem == 3 ? -1 : 1;
+    a.reason = "recorded by the inspect test";
+    bus.publish("BL_STUDY_ANSWER", &a);
+  }
+  study_session_t s{};
+  s.utime = ++utime;
+  s.session_id = id;
+  s.subject_id = subject;
+  s.condition = condition;
+  s.step = aborted ? study_session_t::STEP_PROBLEM_2 : study_session_t::STEP_DONE;
+  s.state = aborted ? study_session_t::STATE_ABORTED : study_session_t::STATE_FINISHED;
+  s.attempt = 1;
+  s.instruction = "thank you";
+  bus.publish("BL_STUDY_SESSION", &s);
 }
 
 }  // namespace
@@ -113,6 +163,12 @@ int main(int argc, char** argv) {
     std::string junk = "not a stack " + std::to_string(i) + " of the inspect test";
     bus.publish("BL_STACK", junk.data(), static_cast<unsigned>(junk.size()));
   }
+  const int8_t C = study_answer_t::OUTCOME_CORRECT, X = study_answer_t::OUTCOME_EXCESS, F = study_answer_t::OUTCOME_FAILED;
+  study_session(bus, "s01", "p01", study_session_t::CONDITION_BLUE, false, 40, 60, {C, X, F});
+  study_session(bus, "s02", "p02", study_session_t::CONDITION_PROPOSED, false, 50, 100, {X, C, C});
+  study_session(bus, "s03", "p03", study_session_t::CONDITION_PROPOSED, false, 80, 120, {C, C, F});
+  study_session(bus, "s04", "p04", study_session_t::CONDITION_BLUE, false, 30, 90, {F, X, C});
+  study_session(bus, "s05", "p05", study_session_t::CONDITION_RED, true, 70, 10, {C, C, C});  // aborted: left out
   until_scenario(2.8);
   if (!watch.last.count("prediction")) {
     std::cerr << "record: no heartbeat from prediction\n";

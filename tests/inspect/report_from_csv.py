@@ -148,6 +148,43 @@ for m in report["modules"]:
     same(f"{m['module']} errors", int(b.groupby("instance")["errors"].max().sum()), m["errors"])
     same(f"{m['module']} dropped", int(b.groupby("instance")["dropped"].max().sum()), m["dropped"])
 
+# Study sessions (the study module's Table 1): sessions with a known condition, not aborted, both trials
+# and three problems answered; the last attempt of each step counts.
+if "study" in report:
+    names = {1: "blue", 2: "red", 3: "proposed"}
+    sessions = messages(pd.concat(by_type("bricklayer.study_session_t"))).sort_values(["session_id", "utime_us"])
+    last_state = sessions.groupby("session_id").last()
+    trials = messages(pd.concat(by_type("bricklayer.study_trial_t"))).sort_values(["attempt", "utime_us"])
+    trials = trials.groupby(["session_id", "trial"]).last()
+    answers = messages(pd.concat(by_type("bricklayer.study_answer_t"))).sort_values(["attempt", "utime_us"])
+    answers = answers.groupby(["session_id", "problem"]).last()
+    same("study sessions", len(last_state), report["study"]["sessions"])
+    counted = {}
+    for sid, st in last_state.iterrows():
+        if st.condition not in names or st.state == 4:
+            continue
+        if not all((sid, t) in trials.index for t in (1, 2)) or not all((sid, p) in answers.index for p in (1, 2, 3)):
+            continue
+        counted.setdefault(names[st.condition], []).append(sid)
+    rows = {r["condition"]: r for r in report["study"]["rows"]}
+    same("study conditions", sorted(counted), sorted(rows))
+    for condition, sids in counted.items():
+        r = rows.get(condition, {})
+        t1 = [trials.loc[(sid, 1)].score_points if "score_points" in trials.columns else trials.loc[(sid, 1)].score for sid in sids]
+        t2 = [trials.loc[(sid, 2)].score_points if "score_points" in trials.columns else trials.loc[(sid, 2)].score for sid in sids]
+        same(f"{condition} subjects", len(sids), r.get("subjects"))
+        same(f"{condition} trial 1 mean", float(sum(t1)) / len(t1), r.get("trial1_mean_points"))
+        same(f"{condition} trial 2 mean", float(sum(t2)) / len(t2), r.get("trial2_mean_points"))
+        for p in (1, 2, 3):
+            outcomes = [answers.loc[(sid, p)].outcome for sid in sids]
+            same(f"{condition} problem {p} solved", sum(o in (1, 2) for o in outcomes), r.get("solved", [None] * 3)[p - 1])
+            same(f"{condition} problem {p} excess", sum(o == 2 for o in outcomes), r.get("excess", [None] * 3)[p - 1])
+        ratios = [b / a for a, b in zip(t1, t2) if a != 0]
+        same(f"{condition} ratio mean", sum(ratios) / len(ratios), r.get("ratio_mean"))
+        if len(ratios) > 1:
+            mean = sum(ratios) / len(ratios)
+            same(f"{condition} ratio variance", sum((x - mean) ** 2 for x in ratios) / (len(ratios) - 1), r.get("ratio_variance"))
+
 print(f"{compared} numbers compared, {len(problems)} differ")
 for p in problems:
     print("  " + p)

@@ -1,6 +1,7 @@
 #include "bricklayer/inspect/report_numbers.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "bricklayer/inspect/wall_clock.h"
 
@@ -95,6 +96,25 @@ Json report_numbers(const ReportStats& s, const ReadSummary& read, const std::ve
                        {"launcher_restarts", m.launcher_restarts}, {"errors", m.errors}, {"dropped", m.dropped},
                        {"last_status", m.last_status}});
   out["modules"] = modules;
+  if (s.study_messages() > 0) {
+    const auto sessions = s.study().sessions();
+    const study::StudyTable table = study::make_table(sessions);
+    auto number = [](double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); };
+    Json rows = Json::array();
+    for (const auto& r : table.rows)
+      rows.push_back({{"condition", study::to_string(r.condition)}, {"subjects", r.subjects},
+                      {"trial1_mean_points", number(r.trial1_mean)}, {"solved", r.solved}, {"excess", r.excess},
+                      {"trial2_mean_points", number(r.trial2_mean)}, {"ratio_n", r.ratio.n},
+                      {"ratio_mean", number(r.ratio.mean)}, {"ratio_variance", number(r.ratio.variance)}});
+    Json pairs = Json::array();
+    for (const auto& p : table.pairs)
+      pairs.push_back({{"a", study::to_string(p.a)}, {"b", study::to_string(p.b)}, {"f", number(p.f.f)},
+                       {"f_p", number(p.f.p)}, {"f_valid", p.f.valid}, {"t", number(p.t.t)}, {"t_df", number(p.t.df)},
+                       {"t_p", number(p.t.p)}, {"t_pooled", p.t.equal_variance}, {"t_valid", p.t.valid},
+                       {"welch_p", number(p.welch.p)}});
+    out["study"] = {{"messages", s.study_messages()}, {"sessions", sessions.size()}, {"rows", rows},
+                    {"pairs", pairs}, {"excluded", table.excluded}, {"problems", s.study().problems()}};
+  }
   out["bins"] = {{"origin_utime_us", s.bin_origin_us()}, {"width_s", static_cast<double>(s.bin_width_us()) / 1e6},
                  {"count", s.bins().size()}};
   return out;

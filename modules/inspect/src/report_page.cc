@@ -99,6 +99,7 @@ class ReportWriter {
     rates();
     health();
     disk();
+    study();
     page_.raw("<footer>Made by bricklayer-report from " + html_escape(std::to_string(n_.at("events").get<uint64_t>())) +
               " log events; the numbers are in report.json, the plots' data and gnuplot scripts in plots/.</footer>\n</body></html>\n");
     std::ofstream out(fs::path(dir_) / "index.html", std::ios::trunc);
@@ -391,6 +392,41 @@ class ReportWriter {
                       fixed(100.0 * c.at("share").get<double>(), 1),
                       span > 0 ? fixed(c.at("bytes").get<double>() / 1e6 * 3600.0 / span, 0) : "-"});
     page_.table({"channel", "MB", "share (%)", "MB per hour"}, rows, "table-disk");
+    page_.end_section();
+  }
+
+  void study() {
+    if (!n_.contains("study")) return;  // no study session in this log
+    const Json& st = n_.at("study");
+    page_.h2("study", "Study sessions (the seed paper's Table 1)");
+    page_.p(std::to_string(st.at("sessions").get<uint64_t>()) + " session(s) in the log. Per display condition: subjects, the first and second trial's average score, how many solved each problem (correct or with excess blocks) and how many of them used excess blocks, and the ratio trial 2 / trial 1 (the study module's Table 1: modules/study/README.md).",
+            "note");
+    auto num = [](const Json& v, int digits) { return v.is_number() ? fixed(v.get<double>(), digits) : std::string("-"); };
+    std::vector<std::vector<std::string>> rows;
+    for (const auto& r : st.at("rows")) {
+      std::vector<std::string> row = {r.at("condition").get<std::string>(), std::to_string(r.at("subjects").get<uint64_t>()),
+                                      num(r.at("trial1_mean_points"), 1)};
+      for (int k = 0; k < 3; ++k)
+        row.push_back(std::to_string(r.at("solved")[k].get<uint64_t>()) + " (" + std::to_string(r.at("excess")[k].get<uint64_t>()) + ")");
+      row.push_back(num(r.at("trial2_mean_points"), 1));
+      row.push_back(num(r.at("ratio_mean"), 3));
+      row.push_back(num(r.at("ratio_variance"), 3));
+      rows.push_back(row);
+    }
+    page_.table({"condition", "subjects", "trial 1 mean", "problem 1 solved (excess)", "problem 2 solved (excess)",
+                 "problem 3 solved (excess)", "trial 2 mean", "ratio mean", "ratio variance"},
+                rows, "table-study");
+    std::vector<std::vector<std::string>> pairs;
+    for (const auto& p : st.at("pairs"))
+      pairs.push_back({p.at("a").get<std::string>() + " vs " + p.at("b").get<std::string>(), num(p.at("f"), 3), num(p.at("f_p"), 4),
+                       p.at("t_pooled").get<bool>() ? "pooled" : "Welch", num(p.at("t"), 3), num(p.at("t_df"), 1), num(p.at("t_p"), 4),
+                       num(p.at("welch_p"), 4)});
+    if (!pairs.empty())
+      page_.table({"conditions", "F", "p (F)", "t-test", "t", "df", "p (t)", "p (Welch)"}, pairs, "table-study-tests");
+    std::string left_out;
+    for (const auto& e : st.at("excluded")) left_out += (left_out.empty() ? "" : "; ") + e.get<std::string>();
+    for (const auto& e : st.at("problems")) left_out += (left_out.empty() ? "" : "; ") + e.get<std::string>();
+    if (!left_out.empty()) page_.p("Left out: " + left_out + ".", "note");
     page_.end_section();
   }
 

@@ -54,6 +54,27 @@ void ReportStats::add(const DecodedEvent& e) {
   else if (type == "bricklayer.prediction_t") on_prediction(*e.message, t);
   else if (type == "bricklayer.heartbeat_t") on_heartbeat(*e.message, t);
   else if (type == "bricklayer.timing_t") on_timing(*e.message, t);
+  else if (type == "bricklayer.study_session_t" || type == "bricklayer.study_trial_t" || type == "bricklayer.study_answer_t")
+    on_study(type, e.event.data);
+}
+
+void ReportStats::on_study(const std::string& type, const std::vector<uint8_t>& data) {
+  // The study module's collector takes its generated messages: decode the same bytes with them (the
+  // generic decoder already accepted them, so this cannot fail unless the two disagree).
+  auto decode = [&](auto& msg) {
+    return msg.decode(data.data(), 0, static_cast<int>(data.size())) == static_cast<int>(data.size());
+  };
+  ++study_messages_;
+  if (type == "bricklayer.study_session_t") {
+    study_session_t m;
+    if (decode(m)) study_.add(m);
+  } else if (type == "bricklayer.study_trial_t") {
+    study_trial_t m;
+    if (decode(m)) study_.add(m);
+  } else {
+    study_answer_t m;
+    if (decode(m)) study_.add(m);
+  }
 }
 
 void ReportStats::on_round(const Json& m) {

@@ -13,7 +13,9 @@
 //   projection's "present" timing_t (received_utime + elapsed_us - utime), rounded down to 10 us;
 // - a restart is a module's heartbeat from a new instance (host:pid) after its first one; errors are
 //   the increments of every instance's error counter;
-// - disk use: every event's bytes in the log file (28-byte header, channel name, message).
+// - disk use: every event's bytes in the log file (28-byte header, channel name, message);
+// - study sessions: their study_session_t, study_trial_t and study_answer_t messages, gathered by the
+//   study module's own collector (bricklayer/study/table.h), which makes the seed paper's Table 1.
 #pragma once
 
 #include <cstdint>
@@ -24,6 +26,7 @@
 
 #include "bricklayer/inspect/decoded_log.h"
 #include "bricklayer/inspect/value_counts.h"
+#include "bricklayer/study/table.h"
 
 namespace bricklayer::inspect {
 
@@ -94,6 +97,9 @@ class ReportStats {
   const ValueCounts& latency_us() const { return latency_; }
   // Per (module, stage) of timing_t: elapsed_us as measured (exact microseconds).
   const std::map<std::pair<std::string, std::string>, ValueCounts>& stage_elapsed_us() const { return stages_; }
+  // Study messages seen (session, trial, answer); 0 when the log holds no study session.
+  uint64_t study_messages() const { return study_messages_; }
+  const study::StudyCollector& study() const { return study_; }
 
  private:
   TimeBin& bin_at(int64_t t_us);
@@ -101,6 +107,7 @@ class ReportStats {
   void on_prediction(const Json& m, int64_t t_us);
   void on_heartbeat(const Json& m, int64_t t_us);
   void on_timing(const Json& m, int64_t t_us);
+  void on_study(const std::string& type, const std::vector<uint8_t>& data);
 
   uint64_t events_ = 0;
   int64_t first_us_ = 0, last_us_ = 0;
@@ -115,6 +122,8 @@ class ReportStats {
   std::map<std::string, ChannelRecord> channels_;
   ValueCounts latency_;
   std::map<std::pair<std::string, std::string>, ValueCounts> stages_;
+  uint64_t study_messages_ = 0;
+  study::StudyCollector study_;
 };
 
 }  // namespace bricklayer::inspect
