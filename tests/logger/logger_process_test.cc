@@ -356,13 +356,13 @@ TEST_CASE("bad arguments are clear errors (exit 2), an unwritable log is an erro
   CHECK(run_logger_expecting_exit(dir, {}, err) == 2);
   CHECK(err.find("expected 1 argument(s), got 0") != std::string::npos);
   CHECK(run_logger_expecting_exit(dir, {"--rotate", "-1", "x"}, err) == 2);
-  CHECK(err.find("--rotate must be between 0 and 100000, got -1") != std::string::npos);
+  CHECK(err.find("--rotate must be in [0, 100000], got -1") != std::string::npos);
   CHECK(run_logger_expecting_exit(dir, {"--split-mb", "ten", "x"}, err) == 2);
   CHECK(err.find("--split-mb expects a finite number, got 'ten'") != std::string::npos);
   CHECK(run_logger_expecting_exit(dir, {"--exclude", "BL_(IMAGE", "x"}, err) == 2);
   CHECK(err.find("--exclude 'BL_(IMAGE' is not a valid regular expression") != std::string::npos);
   CHECK(run_logger_expecting_exit(dir, {"--queue-capacity", "0", "x"}, err) == 2);
-  CHECK(err.find("--queue-capacity must be between 1") != std::string::npos);
+  CHECK(err.find("--queue-capacity must be in [1, 100000000], got 0") != std::string::npos);
   CHECK(run_logger_expecting_exit(dir, {"--rotat", "3", "x"}, err) == 2);
   CHECK(err.find("unknown flag --rotat") != std::string::npos);
   CHECK(run_logger_expecting_exit(dir, {"--lcm-url", "udpm://239.255.76.67:7667?ttl=5", "x"}, err) == 2);

@@ -136,3 +136,34 @@ TEST_CASE("the declaration itself, and the files it names that are missing") {
   c.scenario = (dir / "s.json").string();
   CHECK(missing_paths(c).empty());
 }
+
+namespace {
+struct WithArgument {
+  std::string file;
+  int rotate = 0;
+  template <typename Visitor>
+  void visit(Visitor& v) {
+    v(param("FILE", file, "log file name").argument().must([](const std::string& f) {
+      return f.empty() ? std::string("is empty") : std::string();
+    }));
+    v(param("rotate", rotate, "files kept").range(0, 100000));
+  }
+};
+}  // namespace
+
+TEST_CASE("a field can be an argument instead of a flag") {
+  WithArgument c;
+  Flags flags("prog", "summary");
+  declare_flags(flags, c);
+  const char* argv[] = {"prog", "--rotate", "3", "logs/day"};
+  REQUIRE(flags.parse(4, argv));
+  read_flags(flags, c);
+  CHECK(c.file == "logs/day");
+  CHECK(c.rotate == 3);
+  CHECK(flags.help().find("arguments:\n  FILE  log file name") != std::string::npos);
+  WithArgument d;
+  Flags none("prog", "summary");
+  declare_flags(none, d);
+  const char* bare[] = {"prog"};
+  CHECK_THROWS_AS(none.parse(1, bare), FlagError);  // a required argument
+}

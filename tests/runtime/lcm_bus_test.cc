@@ -47,6 +47,19 @@ TEST_CASE("two live buses hear each other and themselves") {
   CHECK(at_a == std::vector<std::string>{"hello"});
 }
 
+TEST_CASE("a pattern subscription on the live bus sees each matching channel once, under its own name") {
+  LcmBus a(kUrl), b(kUrl);
+  std::vector<std::string> all, stacks;
+  b.subscribe(".*", QueuePolicy::keep(100), [&](const Received& r) { all.push_back(r.channel); });
+  b.subscribe("S", QueuePolicy::keep(100), [&](const Received& r) { stacks.push_back(r.channel); });
+  REQUIRE(send(a, "S", "1"));
+  REQUIRE(send(a, "T", "2"));
+  CHECK(handle_until(b, [&] { return all.size() >= 2; }, 2s));
+  b.handle(50);
+  CHECK(all == std::vector<std::string>{"S", "T"});
+  CHECK(stacks == std::vector<std::string>{"S"});
+}
+
 TEST_CASE("newest wins on the live bus: a backlog is drained and all but the newest dropped, counted") {
   LcmBus a(kUrl), b(kUrl);
   std::vector<std::string> got;

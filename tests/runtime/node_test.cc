@@ -210,3 +210,24 @@ TEST_CASE("a node on a recorded log runs to its end on the log's clock and publi
   CHECK(beats[0] == channel(kHeartbeatChannel) + "@1000000");
   CHECK(beats[1] == channel(kHeartbeatChannel) + "@2000000");
 }
+
+namespace {
+class TapNode final : public Node {
+ public:
+  explicit TapNode(Bus& bus) : Node("tap", bus) {
+    subscribe_bytes("T_.*", QueuePolicy::keep(100), [this](const Received& r) { seen.push_back(r.channel + ":" + std::to_string(r.size)); }, 100);
+  }
+  std::vector<std::string> seen;
+};
+}  // namespace
+
+TEST_CASE("a node can take every matching channel's bytes undecoded") {
+  harness::Rig rig;
+  auto& tap = rig.add<TapNode>();
+  rig.publish_bytes("T_A", {1, 2, 3});
+  rig.publish_bytes("OTHER", {1});
+  rig.publish_bytes("T_B", std::vector<uint8_t>(200, 0));  // over its 100-byte limit
+  rig.step();
+  CHECK(tap.seen == std::vector<std::string>{"T_A:3"});
+  CHECK(tap.counters().errors == 1);
+}

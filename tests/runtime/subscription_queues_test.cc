@@ -84,3 +84,20 @@ TEST_CASE("a handler sees the arrival time the bus stamped") {
   q.dispatch();
   CHECK(seen == 1234);
 }
+
+TEST_CASE("a subscription's channel is a regular expression over the whole name, as in LCM") {
+  SubscriptionQueues q;
+  std::vector<std::string> all, bl, exact;
+  q.add(".*", QueuePolicy::keep(10), [&](const Received& r) { all.push_back(r.channel); });
+  q.add("BL_.*", QueuePolicy::keep(10), [&](const Received& r) { bl.push_back(r.channel); });
+  q.add("BL_STACK", QueuePolicy::keep(10), [&](const Received& r) { exact.push_back(r.channel); });
+  put(q, "BL_STACK", "s");
+  put(q, "BL_IMAGE", "i");
+  put(q, "XBL_STACK", "x");  // a whole-name match: "BL_.*" does not match inside a name
+  CHECK(q.wanted("OTHER"));
+  q.dispatch();
+  CHECK(all == std::vector<std::string>{"BL_STACK", "BL_IMAGE", "XBL_STACK"});
+  CHECK(bl == std::vector<std::string>{"BL_STACK", "BL_IMAGE"});
+  CHECK(exact == std::vector<std::string>{"BL_STACK"});
+  CHECK_THROWS_AS(q.add("BL_(", QueuePolicy::newest(), [](const Received&) {}), std::invalid_argument);
+}

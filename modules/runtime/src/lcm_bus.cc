@@ -15,9 +15,6 @@
 
 namespace bricklayer::runtime {
 namespace {
-// LCM's own queue per subscription: generous, since SubscriptionQueues applies the real policy at
-// every handle(); LCM would otherwise discard silently beyond its default of 30.
-constexpr int kLcmQueueCapacity = 10000;
 // At most this many messages are taken from LCM per handle(), so a flood cannot starve the node.
 constexpr int kMaxDrainPerHandle = 10000;
 
@@ -100,16 +97,19 @@ void LcmBus::close(const std::string& why) {
 
 void LcmBus::subscribe_on_lcm(ChannelContext& context) {
   lcm::Subscription* s = lcm_->subscribeFunction(context.channel, &LcmBus::on_message, &context);
-  if (s) s->setQueueCapacity(kLcmQueueCapacity);
+  // Generous: SubscriptionQueues applies the real policy at every handle(); LCM would otherwise
+  // discard silently beyond its default of 30.
+  if (s) s->setQueueCapacity(options_.lcm_queue_capacity);
 }
 
-void LcmBus::on_message(const lcm::ReceiveBuffer* rbuf, const std::string&, ChannelContext* context) {
+void LcmBus::on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel, ChannelContext* context) {
   LcmBus& self = *context->bus;
   self.last_heard_ = Steady::now();
   self.unheard_publish_ = false;
   // Nothing may throw across LCM's C callback: enqueue only copies bytes (bad_alloc aside).
   try {
-    self.queues_.enqueue(context->channel, static_cast<const uint8_t*>(rbuf->data), rbuf->data_size, self.now_utime());
+    self.queues_.enqueue_for(context->channel, channel, static_cast<const uint8_t*>(rbuf->data), rbuf->data_size,
+                             self.now_utime());
   } catch (...) {
   }
 }
@@ -130,7 +130,8 @@ bool LcmBus::publish(const std::string& channel, const uint8_t* data, size_t siz
 }
 
 const SubscriptionStats& LcmBus::subscribe(const std::string& channel, QueuePolicy policy, Handler handler) {
-  const bool known = queues_.wanted(channel);
+  const auto& patterns = queues_.patterns();
+  const bool known = std::find(patterns.begin(), patterns.end(), channel) != patterns.end();
   const SubscriptionStats& stats = queues_.add(channel, policy, std::move(handler));
   if (!known) {
     contexts_.push_back(ChannelContext{this, channel});

@@ -89,6 +89,15 @@ void Node::subscribe_raw(const std::string& channel, QueuePolicy policy, size_t 
   subscription_stats_.push_back(&stats);
 }
 
+void Node::subscribe_bytes(const std::string& pattern, QueuePolicy policy, std::function<void(const Received&)> handler,
+                           size_t max_bytes) {
+  subscribe_raw(pattern, policy, max_bytes, [handler = std::move(handler)](const Received& r) -> std::function<void()> {
+    return [handler, channel = r.channel, bytes = std::vector<uint8_t>(r.data, r.data + r.size), utime = r.utime] {
+      handler(Received{channel, bytes.data(), bytes.size(), utime});
+    };
+  });
+}
+
 void Node::deliver_pending() {
   for (;;) {
     Inbox* next = nullptr;
@@ -240,6 +249,11 @@ int Node::run() {
   install_signal_handlers();
   while (!g_stop && !stopping_) {
     if (!step(tick_ms_)) break;
+  }
+  try {
+    before_stop();
+  } catch (const std::exception& e) {
+    error("failed stops", std::string("finishing failed: ") + e.what());
   }
   log::info("stopping: received ", counters_.received, ", published ", counters_.published, ", dropped ",
             counters_.dropped + queue_drops(), ", errors ", counters_.errors);

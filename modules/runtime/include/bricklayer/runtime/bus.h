@@ -27,7 +27,7 @@ struct QueuePolicy {
 
 // One message as a handler sees it. data is valid only during the call.
 struct Received {
-  const std::string& channel;
+  const std::string& channel;  // the message's channel (not the pattern subscribed to)
   const uint8_t* data;
   size_t size;
   int64_t utime;  // the bus clock when the message arrived, microseconds
@@ -53,7 +53,8 @@ class Bus {
   virtual bool publish(const std::string& channel, const uint8_t* data, size_t size) = 0;
 
   // Delivers every message on `channel` to handler, from handle() on the calling thread, in arrival
-  // order across all subscriptions. The returned stats live as long as the bus.
+  // order across all subscriptions. As in LCM, `channel` is a regular expression matched against the
+  // whole channel name (".*" is every channel). The returned stats live as long as the bus.
   virtual const SubscriptionStats& subscribe(const std::string& channel, QueuePolicy policy, Handler handler) = 0;
 
   // Waits up to timeout_ms (by this bus's clock) for messages, then delivers what is queued. Returns

@@ -49,6 +49,7 @@ struct Param {
   std::function<std::string(const T&)> rule;   // any other rule: "" when the value keeps it, else why not
   bool file = false;                           // a path the module reads: it must exist ("" = none)
   bool folder = false;                         // a folder the module reads: it must exist ("" = none)
+  bool positional = false;                     // given as an argument (in declaration order), not as --name
 
   Param& range(double lo, double hi) { min = lo; max = hi; return *this; }  // [lo, hi]
   Param& open_range(double lo, double hi) { range(lo, hi); min_open = max_open = true; return *this; }  // (lo, hi)
@@ -59,6 +60,7 @@ struct Param {
   Param& must(std::function<std::string(const T&)> check) { rule = std::move(check); return *this; }
   Param& existing_file() { file = true; return *this; }
   Param& existing_folder() { folder = true; return *this; }
+  Param& argument() { positional = true; return *this; }
 };
 
 template <typename T>
@@ -201,7 +203,9 @@ void declare_flags(Flags& flags, Config& config) {
     std::string help = p.help;
     const std::string rule = config_detail::rule_text(p);
     if (!rule.empty()) help += " [" + rule + "]";
-    if constexpr (std::is_same_v<T, bool>) {
+    if (p.positional) {
+      flags.add_positional(p.name, help);
+    } else if constexpr (std::is_same_v<T, bool>) {
       if (*p.value) throw std::logic_error("config field '" + p.name + "' is a bool defaulting to true; name it for its true case");
       flags.add_bool(p.name, help);
     } else {
@@ -214,15 +218,20 @@ void declare_flags(Flags& flags, Config& config) {
 // Reads every flag given into the fields and checks every field; throws FlagError naming the flag.
 template <typename Config>
 void read_flags(const Flags& flags, Config& config) {
-  auto read = [&flags](auto&& p) {
+  size_t argument = 0;
+  auto read = [&flags, &argument](auto&& p) {
     using T = std::remove_reference_t<decltype(*p.value)>;
-    if (flags.was_set(p.name)) {
-      const std::string text = flags.get(p.name);
+    const bool given = p.positional ? argument < flags.positional().size() : flags.was_set(p.name);
+    if (given) {
+      const std::string text = p.positional ? flags.positional()[argument++] : flags.get(p.name);
       const std::optional<T> v = config_detail::from_text<T>(text);
-      if (!v) throw FlagError("--" + p.name + " expects " + config_detail::a_type_name<T>() + ", got '" + text + "'");
+      if (!v)
+        throw FlagError((p.positional ? p.name : "--" + p.name) + " expects " + config_detail::a_type_name<T>() +
+                        ", got '" + text + "'");
       *p.value = *v;
     }
-    if (const std::string why = violation(p, *p.value); !why.empty()) throw FlagError("--" + p.name + " " + why);
+    if (const std::string why = violation(p, *p.value); !why.empty())
+      throw FlagError((p.positional ? p.name : "--" + p.name) + " " + why);
   };
   config.visit(read);
 }

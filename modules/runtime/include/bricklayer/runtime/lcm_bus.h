@@ -31,6 +31,9 @@ struct LcmBusOptions {
   std::string loopback_channel;
   double silence_s = 3.0;
   double reopen_every_s = 1.0;
+  // Messages LCM itself may hold per subscription between two handle() calls before it discards new
+  // ones (LCM's default is 30); the node's own QueuePolicy applies after.
+  int lcm_queue_capacity = 10000;
 };
 
 class LcmBus final : public Bus {
@@ -55,7 +58,7 @@ class LcmBus final : public Bus {
  private:
   struct ChannelContext {
     LcmBus* bus;
-    std::string channel;
+    std::string channel;  // the pattern LCM matched
   };
   static void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel, ChannelContext* context);
   void try_open();
@@ -68,7 +71,7 @@ class LcmBus final : public Bus {
   LcmBusOptions options_;
   std::unique_ptr<lcm::LCM> lcm_;
   SubscriptionQueues queues_;
-  std::list<ChannelContext> contexts_;  // one per distinct channel; stable addresses for LCM's callbacks
+  std::list<ChannelContext> contexts_;  // one per distinct pattern; stable addresses for LCM's callbacks
   std::string problem_;
   int reopens_ = 0;
   bool ever_open_ = false;

@@ -92,6 +92,11 @@ class Node {
     });
   }
 
+  // Every message on the channels matching pattern (a regular expression, ".*" = all), undecoded: for
+  // nodes that handle bytes (the logger). Oversized messages are counted errors.
+  void subscribe_bytes(const std::string& pattern, QueuePolicy policy, std::function<void(const Received&)> handler,
+                       size_t max_bytes = kDefaultMaxMessageBytes);
+
   // An output: counted as published. A refused publication is a counted error.
   template <typename T>
   bool publish(const std::string& channel, const T& msg) {
@@ -107,6 +112,8 @@ class Node {
   virtual void tick() {}
   // Called just before each heartbeat: refresh values and status.
   virtual void before_heartbeat() {}
+  // Called once when run() ends, before the last heartbeat: finish what is in flight.
+  virtual void before_stop() {}
 
   // Asks the next step to wait no later than this bus time (pacing: a camera's next frame).
   void wake_at(int64_t utime);
@@ -122,6 +129,8 @@ class Node {
   // A rate-limited warning that counts nothing.
   void warn(const std::string& kind, const std::string& message);
   void count_dropped(int64_t n = 1) { counters_.dropped += n; }
+  // For a node whose counters mean something else (the logger: published = events written).
+  NodeCounters& own_counters() { return counters_; }
   void count_received(int64_t n = 1) { counters_.received += n; }
 
   // Input staleness: while channel has been silent for more than after_s (since the node started, or

@@ -12,6 +12,8 @@
 //   static void check(const Config&);          rules across fields; throws std::invalid_argument
 //   static std::optional<int> before_bus(const Config&);  work that needs no bus (an offline mode):
 //                                              an exit code ends the program there
+//   static LcmBusOptions bus_options(const Config&);      how the live bus is set up (default: the
+//                                              heartbeat as the loopback check)
 //
 // The runtime's flags: --lcm-url, --log-level, --check-config (checks the flags and every file they
 // name, prints the configuration, starts nothing: the launcher's profile check), --describe-config
@@ -69,7 +71,9 @@ int node_main(int argc, char** argv) {
       if (const std::optional<int> code = NodeType::before_bus(config)) return *code;
     }
     Node::install_signal_handlers();
-    LcmBus bus(url, LcmBusOptions{channel(kHeartbeatChannel)});
+    LcmBusOptions bus_options{channel(kHeartbeatChannel)};
+    if constexpr (requires { NodeType::bus_options(config); }) bus_options = NodeType::bus_options(config);
+    LcmBus bus(url, bus_options);
     std::optional<NodeType> node;
     try {
       node.emplace(config, bus);

@@ -1,11 +1,15 @@
 // The queueing every bus implementation shares, so that the three deliver by the same rules: each
 // subscription holds its messages under its QueuePolicy (oldest dropped first, counted), and
-// dispatch() hands them to their handlers in global arrival order.
+// dispatch() hands them to their handlers in global arrival order. A subscription's channel is, as in
+// LCM, a regular expression matched against the whole channel name ("BL_STACK", ".*", "BL_.*").
 #pragma once
 
 #include <cstdint>
 #include <deque>
 #include <list>
+#include <map>
+#include <optional>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -18,8 +22,12 @@ class SubscriptionQueues {
   // The stats of the new subscription (stable for the life of this object).
   const SubscriptionStats& add(const std::string& channel, QueuePolicy policy, Handler handler);
 
-  // Queues a copy of the message for every subscription of the channel. Returns how many took it.
+  // Queues a copy of the message for every subscription whose pattern matches the channel. Returns
+  // how many took it.
   int enqueue(const std::string& channel, const uint8_t* data, size_t size, int64_t utime);
+  // The same, for the subscriptions made with exactly this pattern (LCM has already matched it).
+  int enqueue_for(const std::string& pattern, const std::string& channel, const uint8_t* data, size_t size,
+                  int64_t utime);
 
   // Whether any subscription listens to the channel.
   bool wanted(const std::string& channel) const;
@@ -30,23 +38,31 @@ class SubscriptionQueues {
   int dispatch();
 
   bool empty() const;
-  const std::vector<std::string>& channels() const { return channels_; }
+  // The distinct patterns subscribed to, in subscription order.
+  const std::vector<std::string>& patterns() const { return patterns_; }
 
  private:
   struct Pending {
     uint64_t sequence;
     int64_t utime;
+    std::string channel;
     std::vector<uint8_t> bytes;
   };
   struct Subscription {
-    std::string channel;
+    std::string pattern;
+    std::optional<std::regex> regex;  // unset when the pattern is a plain channel name
+    mutable std::map<std::string, bool> matches;  // regex results by channel (bounded: names come from the network)
     QueuePolicy policy;
     Handler handler;
     SubscriptionStats stats;
     std::deque<Pending> queue;
   };
+  static bool matches(const Subscription& s, const std::string& channel);
+  void push(Subscription& s, uint64_t sequence, const std::string& channel, const uint8_t* data, size_t size,
+            int64_t utime);
+
   std::list<Subscription> subscriptions_;  // stable addresses: the stats are handed out
-  std::vector<std::string> channels_;      // distinct, in subscription order
+  std::vector<std::string> patterns_;      // distinct, in subscription order
   uint64_t next_sequence_ = 0;
 };
 

@@ -1,0 +1,176 @@
+#include "bricklayer/logger/logger_node.h"
+
+#include <pthread.h>
+#include <signal.h>
+
+#include <cmath>
+#include <ctime>
+
+#include "bricklayer/common/channels.h"
+#include "bricklayer/common/log.h"
+#include "bricklayer/image_t.hpp"
+#include "bricklayer/logger/log_series.h"
+#include "bricklayer/logger/udp_socket_stats.h"
+
+namespace bricklayer::logger {
+namespace {
+
+// SIGHUP (start a new file) is blocked in every thread and collected in tick(): a handler would
+// interrupt the bus's poll.
+void block_sighup() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGHUP);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+}
+bool take_sighup() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGHUP);
+  const timespec zero{0, 0};
+  return sigtimedwait(&set, nullptr, &zero) == SIGHUP;
+}
+
+WriterOptions writer_options(const LoggerConfig& c) {
+  WriterOptions w;
+  w.base = c.strftime ? expand_strftime(c.file, static_cast<long long>(std::time(nullptr))) : c.file;
+  w.rotate = c.rotate;
+  w.split_bytes = static_cast<int64_t>(std::llround(c.split_mb * 1024 * 1024));
+  w.flush_ms = c.flush_ms;
+  w.max_unwritten_bytes = static_cast<int64_t>(std::llround(c.max_unwritten_mb * 1024 * 1024));
+  return w;
+}
+
+}  // namespace
+
+std::string LoggerConfig::regex_rule(const std::string& pattern) {
+  try {
+    std::regex check(pattern);
+    return "";
+  } catch (const std::regex_error& e) {
+    return "'" + pattern + "' is not a valid regular expression: " + e.what();
+  }
+}
+
+runtime::LcmBusOptions LoggerNode::bus_options(const Config& config) {
+  block_sighup();  // before LCM and the writer start their threads, which inherit the mask
+  runtime::LcmBusOptions o;
+  o.loopback_channel = channel(kHeartbeatChannel);
+  o.lcm_queue_capacity = config.queue_capacity;
+  return o;
+}
+
+LoggerNode::LoggerNode(const Config& config, runtime::Bus& bus)
+    : Node("logger", bus),
+      channels_(config.channels),
+      has_exclude_(!config.exclude.empty()),
+      exclude_(config.exclude.empty() ? "^$" : config.exclude),
+      image_channel_(channel(kImageChannel)),
+      port_(udpm_port(bus.describe())) {
+  runtime::validate(config);
+  writer_ = std::make_unique<EventWriter>(writer_options(config), [this](const Event& e) { on_written(e); });
+  // One subscription sees everything; --channels / --exclude narrow it in wanted() (the same full
+  // match), so what is skipped is counted. The queue only holds one burst: the handler copies.
+  subscribe_bytes(".*", runtime::QueuePolicy::keep(size_t{1} << 20), [this](const runtime::Received& r) { on_message(r); },
+                  size_t{1} << 30);
+  const int64_t recv_buf_bytes = static_cast<int64_t>(std::llround(config.recv_buf_mb * 1024 * 1024));
+  if (port_ > 0) {
+    const UdpSocketStats st = raise_receive_buffer(port_, recv_buf_bytes);
+    rcvbuf_bytes_ = st.rcvbuf_bytes;
+    if (st.sockets == 0)
+      log::warn("found no socket of this process on UDP port ", port_, ": kernel drops cannot be counted");
+    else if (st.rcvbuf_bytes < recv_buf_bytes)
+      log::warn("the kernel gave a ", st.rcvbuf_bytes, "-byte receive buffer of the ", recv_buf_bytes,
+                " asked (capped by net.core.rmem_max; run as root or: sysctl -w net.core.rmem_max=", recv_buf_bytes, ")");
+  }
+  log::info("logging ", bus.describe(), " into ", writer_->stats().current_file, " (receive buffer ", rcvbuf_bytes_,
+            " bytes, queue ", config.queue_capacity, " messages / ", static_cast<int64_t>(config.max_unwritten_mb), " MB)");
+  update_figures();
+}
+
+LoggerNode::~LoggerNode() { writer_->stop(); }
+
+bool LoggerNode::wanted(const std::string& ch) {
+  if (auto it = wanted_.find(ch); it != wanted_.end()) return it->second;
+  const bool w = std::regex_match(ch, channels_) && !(has_exclude_ && std::regex_match(ch, exclude_));
+  if (wanted_.size() < 4096) wanted_.emplace(ch, w);  // bounded: channel names come from the network
+  return w;
+}
+
+void LoggerNode::on_message(const runtime::Received& r) {
+  if (!wanted(r.channel)) {
+    ++excluded_;
+    return;
+  }
+  Event e;
+  e.utime = r.utime;
+  e.channel = r.channel;
+  e.data.assign(r.data, r.data + r.size);
+  writer_->push(std::move(e));
+}
+
+void LoggerNode::on_written(const Event& e) {
+  // Numbers that skip reveal messages lost before they reached us.
+  if (e.channel != image_channel_) return;
+  image_t img{};
+  if (img.decode(e.data.data(), 0, static_cast<int>(e.data.size())) < 0) return;  // logged as bytes anyway
+  if (const int64_t skipped = sequence_.observe(e.channel, img.source, img.frame_number); skipped > 0)
+    log::warn(e.channel, " from ", img.source, ": ", skipped, " frame(s) before ", img.frame_number,
+              " never reached the logger");
+  gaps_ = sequence_.missing();
+  source_restarts_ = sequence_.restarts();
+}
+
+void LoggerNode::update_figures() {
+  const WriterStats w = writer_->stats();
+  runtime::NodeCounters& c = own_counters();
+  c.published = w.written;
+  c.dropped = w.dropped;
+  c.errors = w.write_errors;
+  if (port_ > 0 && now() >= next_socket_check_utime_) {
+    const UdpSocketStats st = udp_socket_stats(port_);
+    kernel_drops_ = st.drops;
+    rcvbuf_bytes_ = st.rcvbuf_bytes;
+    next_socket_check_utime_ = now() + 500'000;
+  }
+  set_value("kernel_drops", static_cast<double>(kernel_drops_));
+  set_value("sequence_gaps", static_cast<double>(gaps_.load()));
+  set_value("source_restarts", static_cast<double>(source_restarts_.load()));
+  set_value("excluded", static_cast<double>(excluded_));
+  set_value("bytes_written", static_cast<double>(w.bytes));
+  set_value("queue_bytes", static_cast<double>(w.queued_bytes));
+  set_value("queue_peak_bytes", static_cast<double>(w.peak_queued_bytes));
+  set_value("files", static_cast<double>(w.files));
+  set_value("rcvbuf_bytes", static_cast<double>(rcvbuf_bytes_));
+  const int64_t lost = w.dropped + kernel_drops_ + gaps_.load();
+  if (lost > 0 || w.write_errors > 0) {
+    set_status("LOSING: " + std::to_string(w.dropped) + " queue-full drops, " + std::to_string(kernel_drops_) +
+               " kernel drops, " + std::to_string(gaps_.load()) + " sequence gaps, " + std::to_string(w.write_errors) +
+               " write errors");
+  } else {
+    set_status("ok");
+  }
+}
+
+void LoggerNode::tick() {
+  update_figures();
+  if (take_sighup()) writer_->request_new_file();
+}
+
+void LoggerNode::before_stop() {
+  // Take what the bus still holds (until it is quiet for 50 ms, at most 1 s), then write, flush and
+  // sync it all.
+  const int64_t until = now() + 1'000'000;
+  for (int64_t before = -1; now() < until && counters().received != before;) {
+    before = counters().received;
+    if (!step(50)) break;
+  }
+  writer_->stop();
+  update_figures();
+  const WriterStats w = writer_->stats();
+  log::info("stopped: ", counters().received, " received, ", w.written, " written (", w.bytes, " bytes, ", w.files,
+            " file(s), last ", w.current_file, "), ", w.dropped, " dropped (queue full), ", kernel_drops_,
+            " kernel drops, ", gaps_.load(), " sequence gaps, ", w.write_errors, " write errors, ", excluded_, " excluded");
+}
+
+}  // namespace bricklayer::logger
