@@ -3,17 +3,20 @@
 #include <catch2/catch.hpp>
 
 #include "bricklayer/core/predict.h"
-#include "bricklayer/launcher/process.h"
+#include "bricklayer/common/channels.h"
 #include "bricklayer/prediction/prediction_logic.h"
 #include "bricklayer/prediction/sample_stacks.h"
 #include "bricklayer/prediction_t.hpp"
+#include "bricklayer/runtime/lcm_bus.h"
 #include "bricklayer/stack_t.hpp"
-#include "bus_test_util.h"
+#include "harness/program.h"
+#include "harness/recorder.h"
 
 using namespace bricklayer;
 using namespace std::chrono_literals;
 
 namespace {
+constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 // The expected answer, from the core directly (independent of PredictionLogic's mapping).
 prediction_t from_core(const stack_t& s) {
@@ -50,16 +53,10 @@ prediction_t from_core(const stack_t& s) {
 }  // namespace
 
 TEST_CASE("1,000 stacks through bricklayer-prediction come back byte-identical to the core's answers") {
-  launcher::SpawnOptions opts;
-  opts.env = {std::string("LCM_DEFAULT_URL=") + test::kTestUrl};
-  auto proc = launcher::Process::spawn({test::bin("bricklayer-prediction"), "--log-level", "warn"}, opts);
-
-  test::Listener bus;
-  REQUIRE(bus.ok());
-  bus.listen(channel(kPredictionChannel));
-  bus.listen(channel(kHeartbeatChannel));
-  heartbeat_t hb{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", hb) && hb.pid == proc.pid(); }, 10s));
+  runtime::LcmBus bus(kUrl);
+  auto rec = harness::Recorder::live(bus, {channel(kPredictionChannel), channel(kHeartbeatChannel)});
+  harness::Program proc("bricklayer-prediction", {"--log-level", "warn", std::string("--lcm-url=") + kUrl});
+  REQUIRE(rec.wait_for_heartbeat("prediction", [&](const heartbeat_t& hb) { return hb.pid == proc.pid(); }, 10s));
 
   constexpr int kCount = 1000;
   std::vector<stack_t> sent;
@@ -69,17 +66,20 @@ TEST_CASE("1,000 stacks through bricklayer-prediction come back byte-identical t
   for (int i = 1; i <= kCount; ++i) {
     stack_t s = prediction::sample_stack(1 + (i * 7) % 30, static_cast<uint32_t>(i), 5'000'000 + i * 1000, i);
     sent.push_back(s);
-    REQUIRE(bus.lcm().publish(channel(kStackChannel), &s) == 0);
+    const auto bytes = runtime::encode(s);
+    REQUIRE(bus.publish(channel(kStackChannel), bytes.data(), bytes.size()));
     INFO("waiting for the answer to frame " << i);
-    REQUIRE(bus.pump_until([&] { return bus.count(channel(kPredictionChannel)) == static_cast<size_t>(i); }, 3s));
+    REQUIRE(rec.wait_until([&] { return rec.count(channel(kPredictionChannel)) == static_cast<size_t>(i); }, 3s));
   }
-  auto answers = bus.on(channel(kPredictionChannel));
+  std::vector<std::vector<uint8_t>> answers;
+  for (const auto& m : rec.messages())
+    if (m.channel == channel(kPredictionChannel)) answers.push_back(m.bytes);
   REQUIRE(answers.size() == static_cast<size_t>(kCount));
   int identical = 0;
   for (int i = 0; i < kCount; ++i) {
     prediction_t expected = from_core(sent[static_cast<size_t>(i)]);
     if (!expected.balanced) ++unbalanced;
-    if (test::encode(expected) == answers[static_cast<size_t>(i)].bytes) ++identical;
+    if (runtime::encode(expected) == answers[static_cast<size_t>(i)]) ++identical;
   }
   CHECK(identical == kCount);
   // The sample piles must exercise both verdicts, or "identical" proves little.
@@ -87,10 +87,11 @@ TEST_CASE("1,000 stacks through bricklayer-prediction come back byte-identical t
   CHECK(unbalanced < kCount - 50);
 
   // The process's own account: everything received and answered, nothing dropped, no errors.
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", hb) && hb.published == kCount; }, 3s));
-  CHECK(hb.received == kCount);
-  CHECK(hb.dropped == 0);
-  CHECK(hb.errors == 0);
-  auto st = proc.stop(3s);
+  auto hb = rec.wait_for_heartbeat("prediction", [](const heartbeat_t& h) { return h.published == kCount; }, 3s);
+  REQUIRE(hb);
+  CHECK(hb->received == kCount);
+  CHECK(hb->dropped == 0);
+  CHECK(hb->errors == 0);
+  auto st = proc.stop();
   CHECK(st.clean());  // SIGTERM: a clean stop with exit code 0
 }

@@ -7,11 +7,9 @@
 #include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
-#include "bricklayer/launcher/process.h"
-#include "bus_test_util.h"
+#include "harness/program.h"
+#include "harness/scratch.h"
 
 using namespace bricklayer;
 using namespace std::chrono_literals;
@@ -27,19 +25,16 @@ std::string netns_of(pid_t pid) {
 }
 
 void sh(const std::string& command) {
-  INFO(command);
-  auto p = launcher::Process::spawn({"/bin/sh", "-c", command});
-  auto st = p.wait_for(10s);
-  REQUIRE(st);
-  REQUIRE(st->clean());
+  const harness::Ran ran = harness::run_program("/bin/sh", {"-c", command}, 10s);
+  INFO(command << "\n" << ran.err);
+  REQUIRE(ran.status.clean());
 }
 
 // A "host": a network namespace held open by a sleeping process, joined to the other by a veth end.
 struct Host {
-  launcher::Process anchor;
+  harness::Program anchor{"/usr/bin/unshare", {"-n", "/bin/sleep", "300"}};
   std::string pid;
   Host() {
-    anchor = launcher::Process::spawn({"/usr/bin/unshare", "-n", "/bin/sleep", "300"});
     const std::string mine = netns_of(::getpid());
     for (int i = 0; i < 400 && (netns_of(anchor.pid()).empty() || netns_of(anchor.pid()) == mine); ++i)
       usleep(5000);
@@ -52,21 +47,12 @@ struct Host {
        address + " dev " + dev + " && ip link set " + dev + " multicast on && ip link set " + dev +
        " up && ip route add 224.0.0.0/4 dev " + dev + "'");
   }
-  launcher::Process run(std::vector<std::string> argv, const std::string& out_path) {
-    argv.insert(argv.begin(), {"/usr/bin/nsenter", "-t", pid, "-n"});
-    launcher::SpawnOptions o;
-    o.stdout_path = out_path;
-    o.merge_stderr = true;
-    return launcher::Process::spawn(argv, o);
+  // A program of the build (target name) run inside this host's namespace.
+  harness::Program run(const std::string& target, std::vector<std::string> args) {
+    args.insert(args.begin(), {"-t", pid, "-n", harness::program_path(target)});
+    return harness::Program("/usr/bin/nsenter", args);
   }
 };
-
-std::string slurp(const std::string& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 }  // namespace
 
@@ -75,36 +61,30 @@ TEST_CASE("stacks published on the camera host produce predictions on the projec
   sh("ip link add blcam type veth peer name blproj");
   camera.configure("blcam", "10.201.0.1/24");
   projector.configure("blproj", "10.201.0.2/24");
-  const std::string dir = fs::temp_directory_path() / ("bricklayer-two-hosts-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-
-  auto prediction = projector.run({test::bin("bricklayer-prediction"), "--lcm-url", kLanUrl}, dir + "/prediction.out");
+  harness::Program prediction = projector.run("bricklayer-prediction", {"--lcm-url", kLanUrl});
 
   // The camera host's client waits for the prediction's heartbeat (projector -> camera), then sends
   // stacks and checks every answer byte for byte against the logic run locally (camera -> projector -> camera).
-  auto client = camera.run({test::bin("bricklayer-bench-roundtrip"), "--no-spawn", "--verify", "--blocks", "5,25",
-                            "--count", "40", "--warmup", "0", "--lcm-url", kLanUrl},
-                           dir + "/client.out");
-  auto st = client.wait_for(60s);
+  harness::Program client = camera.run("bricklayer-bench-roundtrip", {"--no-spawn", "--verify", "--blocks", "5,25", "--count",
+                                                                      "40", "--warmup", "0", "--lcm-url", kLanUrl});
+  auto st = client.wait_exit(60s);
   REQUIRE(st);
-  std::string out = slurp(dir + "/client.out");
+  const std::string out = client.stdout_text() + client.stderr_text();
   INFO(out);
   CHECK(st->clean());  // exit 0: no lost round trips, no mismatches
   CHECK(out.find("     25 ") != std::string::npos);
 
   SECTION("with the host-only URL (ttl=0) no stack leaves the camera host") {
-    auto local = camera.run({test::bin("bricklayer-bench-roundtrip"), "--no-spawn", "--blocks", "5", "--count", "3",
-                             "--warmup", "0", "--timeout-ms", "300", "--lcm-url", "udpm://239.255.76.67:7667?ttl=0"},
-                            dir + "/local.out");
-    auto lst = local.wait_for(30s);
+    harness::Program local = camera.run("bricklayer-bench-roundtrip", {"--no-spawn", "--blocks", "5", "--count", "3", "--warmup",
+                                                                       "0", "--timeout-ms", "300", "--lcm-url",
+                                                                       "udpm://239.255.76.67:7667?ttl=0"});
+    auto lst = local.wait_exit(30s);
     REQUIRE(lst);
-    std::string lout = slurp(dir + "/local.out");
+    const std::string lout = local.stdout_text() + local.stderr_text();
     INFO(lout);
     // It hears the projector's heartbeats (sent with ttl=1), but its own ttl=0 stacks stay home: all lost.
     CHECK(lst->code == 1);
     CHECK(lout.find("      3 ") != std::string::npos);
   }
-  prediction.stop(3s);
-  std::error_code ec;
-  fs::remove_all(dir, ec);
+  prediction.stop();
 }
