@@ -1,4 +1,4 @@
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 
 #include <catch2/catch.hpp>
 

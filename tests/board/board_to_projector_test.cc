@@ -1,11 +1,11 @@
-#include "bricklayer/projection/board_to_projector.h"
+#include "bricklayer/board/board_to_projector.h"
 
 #include <catch2/catch.hpp>
 
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 
 using namespace bricklayer;
-using namespace bricklayer::projection;
+using namespace bricklayer::board;
 
 TEST_CASE("the uncalibrated default puts the surface edge where simcam and vision expect it") {
   BoardToProjector m;
@@ -54,4 +54,31 @@ TEST_CASE("singular or non-finite calibrations are rejected with a message") {
                     Catch::Contains("non-finite"));
   calibration_t zero{};
   CHECK_THROWS(BoardToProjector::from_calibration(zero));
+}
+
+TEST_CASE("a calibration made for another projector resolution is scaled to ours") {
+  calibration_t cal{};
+  const std::array<double, 9> c2p = {1.6, 0, 12, 0, 1.6, -8, 0, 0, 1};
+  for (int k = 0; k < 9; ++k) {
+    cal.camera_to_projector[k] = c2p[k];
+    cal.camera_to_board[k] = BoardGeometry{}.camera_to_board()[k];
+  }
+  cal.projector_width = 1024;
+  cal.projector_height = 768;
+  const Point2 same = BoardToProjector::for_projector(cal, 1024, 768).map(0.5, 1.0);
+  const Point2 direct = BoardToProjector::from_calibration(cal).map(0.5, 1.0);
+  CHECK(same.x == Approx(direct.x));
+  CHECK(same.y == Approx(direct.y));
+  // The same projector calibrated at 2048x1536, shown at 1024x768: every pixel halves.
+  calibration_t big = cal;
+  big.projector_width = 2048;
+  big.projector_height = 1536;
+  for (int k = 0; k < 6; ++k) big.camera_to_projector[k] *= 2;
+  const Point2 scaled = BoardToProjector::for_projector(big, 1024, 768).map(0.5, 1.0);
+  CHECK(scaled.x == Approx(direct.x));
+  CHECK(scaled.y == Approx(direct.y));
+  // Different aspect: x and y scale separately.
+  const Point2 wide = BoardToProjector::for_projector(cal, 2048, 768).map(0.5, 1.0);
+  CHECK(wide.x == Approx(2 * direct.x));
+  CHECK(wide.y == Approx(direct.y));
 }

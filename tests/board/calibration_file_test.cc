@@ -8,30 +8,30 @@
 #include <string>
 #include <unistd.h>
 
-#include "bricklayer/calibration/calibration_file.h"
-#include "bricklayer/calibration/mapping.h"
+#include "bricklayer/board/calibration_file.h"
+#include "bricklayer/board/mapping.h"
 
-namespace cal = bricklayer::calibration;
+namespace board = bricklayer::board;
 using nlohmann::json;
 
 namespace {
 
 json valid_json() {
-  bricklayer::calibration_t c = cal::default_calibration();
+  bricklayer::calibration_t c = board::default_calibration();
   c.distortion[0] = -0.08;
   c.distortion[1] = 0.01;
   c.reprojection_error_mean_px = 0.2;
   c.reprojection_error_max_px = 0.9;
   c.utime = 1763780000000000;
-  return json::parse(cal::calibration_to_json(c));
+  return json::parse(board::calibration_to_json(c));
 }
 
 // Parses j and returns the error message ("" when it parsed).
 std::string error_of(const json& j) {
   try {
-    cal::parse_calibration_json(j.dump());
+    board::parse_calibration_json(j.dump());
     return "";
-  } catch (const cal::CalibrationFileError& e) {
+  } catch (const board::CalibrationFileError& e) {
     return e.what();
   }
 }
@@ -44,10 +44,10 @@ std::string temp_path(const std::string& name) {
 
 TEST_CASE("A calibration survives save and load exactly") {
   const json j = valid_json();
-  const bricklayer::calibration_t c = cal::parse_calibration_json(j.dump());
+  const bricklayer::calibration_t c = board::parse_calibration_json(j.dump());
   const std::string path = temp_path("roundtrip.json");
-  cal::save_calibration(path, c);
-  const bricklayer::calibration_t back = cal::load_calibration(path);
+  board::save_calibration(path, c);
+  const bricklayer::calibration_t back = board::load_calibration(path);
   std::remove(path.c_str());
   CHECK(back.utime == c.utime);
   CHECK(back.camera_width == 640);
@@ -61,12 +61,12 @@ TEST_CASE("A calibration survives save and load exactly") {
   CHECK(back.reprojection_error_max_px == 0.9);
   // The mapping round-trips through the lens and the homography.
   const cv::Point2d p(601.5, 17.25);
-  CHECK(cv::norm(cal::camera_to_projector(back, cal::projector_to_camera(back, p)) - p) < 1e-6);
+  CHECK(cv::norm(board::camera_to_projector(back, board::projector_to_camera(back, p)) - p) < 1e-6);
   // The default maps like the shared default setup: projector = 1.6 x camera, board from BoardGeometry.
-  const auto d = cal::default_calibration();
-  CHECK(cv::norm(cal::camera_to_projector(d, {100, 200}) - cv::Point2d(160, 320)) < 1e-9);
-  CHECK(cv::norm(cal::camera_to_board(d, {320, 440}) - cv::Point2d(0, 0)) < 1e-9);
-  CHECK(cv::norm(cal::camera_to_board(d, {380, 380}) - cv::Point2d(1, 1)) < 1e-9);
+  const auto d = board::default_calibration();
+  CHECK(cv::norm(board::camera_to_projector(d, {100, 200}) - cv::Point2d(160, 320)) < 1e-9);
+  CHECK(cv::norm(board::camera_to_board(d, {320, 440}) - cv::Point2d(0, 0)) < 1e-9);
+  CHECK(cv::norm(board::camera_to_board(d, {380, 380}) - cv::Point2d(1, 1)) < 1e-9);
 }
 
 TEST_CASE("Every key is required and unknown keys are refused") {
@@ -131,9 +131,9 @@ TEST_CASE("Bad values are rejected with a message naming them") {
 TEST_CASE("Text that is not a calibration file is rejected") {
   auto error_of_text = [](const std::string& text) {
     try {
-      cal::parse_calibration_json(text);
+      board::parse_calibration_json(text);
       return std::string();
-    } catch (const cal::CalibrationFileError& e) {
+    } catch (const board::CalibrationFileError& e) {
       return std::string(e.what());
     }
   };
@@ -150,26 +150,26 @@ TEST_CASE("Text that is not a calibration file is rejected") {
 
   const std::string missing = temp_path("does-not-exist.json");
   try {
-    cal::load_calibration(missing);
+    board::load_calibration(missing);
     FAIL("loaded a missing file");
-  } catch (const cal::CalibrationFileError& e) {
+  } catch (const board::CalibrationFileError& e) {
     CHECK(std::string(e.what()).find(missing) != std::string::npos);
     CHECK(std::string(e.what()).find("bricklayer-calibrate") != std::string::npos);
   }
   const std::string broken = temp_path("broken.json");
   std::ofstream(broken) << "{\"format\": \"bricklayer-calibration\"}";
   try {
-    cal::load_calibration(broken);
+    board::load_calibration(broken);
     FAIL("loaded a broken file");
-  } catch (const cal::CalibrationFileError& e) {
+  } catch (const board::CalibrationFileError& e) {
     CHECK(std::string(e.what()).find(broken) != std::string::npos);
     CHECK(std::string(e.what()).find("missing key") != std::string::npos);
   }
   std::remove(broken.c_str());
   // save refuses an invalid calibration and leaves no file behind.
-  bricklayer::calibration_t bad = cal::default_calibration();
+  bricklayer::calibration_t bad = board::default_calibration();
   bad.camera_to_projector[8] = std::nan("");
   const std::string target = temp_path("invalid.json");
-  CHECK_THROWS_AS(cal::save_calibration(target, bad), cal::CalibrationFileError);
+  CHECK_THROWS_AS(board::save_calibration(target, bad), board::CalibrationFileError);
   CHECK_FALSE(std::ifstream(target).good());
 }

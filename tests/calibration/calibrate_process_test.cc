@@ -22,9 +22,9 @@
 #include <string>
 #include <vector>
 
-#include "bricklayer/calibration/calibration_file.h"
-#include "bricklayer/calibration/mapping.h"
-#include "bricklayer/calibration/patterns.h"
+#include "bricklayer/board/calibration_file.h"
+#include "bricklayer/board/mapping.h"
+#include "bricklayer/patterns/patterns.h"
 #include "bricklayer/calibration_t.hpp"
 #include "bricklayer/command_t.hpp"
 #include "bricklayer/common/channels.h"
@@ -37,7 +37,6 @@
 
 extern char** environ;
 
-namespace cal = bricklayer::calibration;
 namespace sim = bricklayer::simcam;
 using namespace bricklayer;
 
@@ -186,7 +185,7 @@ class FakeRig {
   void on_command(const command_t& c) {
     if (!answer_projector_) return;
     if (c.command == command_t::SHOW_PATTERN) {
-      shown_ = cal::render_pattern(c, renderer_.projector().size);
+      shown_ = patterns::render_pattern(c, renderer_.projector().size);
       ++patterns_shown;
     } else if (c.command == command_t::CLEAR_PATTERN) {
       shown_ = cv::Mat(renderer_.projector().size, CV_8UC3, cv::Scalar(40, 40, 40));
@@ -247,7 +246,7 @@ double max_mapping_error(const calibration_t& c, const sim::CameraSetup& camera,
     for (double x = 10; x <= 630; x += 20) {
       const cv::Point2d p = sim::rectified_to_camera(camera, {x, y});
       if (p.x < 2 || p.y < 2 || p.x > camera.size.width - 3 || p.y > camera.size.height - 3) continue;
-      worst = std::max(worst, cv::norm(cal::camera_to_projector(c, p) - sim::camera_to_projector(camera, projector, p)));
+      worst = std::max(worst, cv::norm(board::camera_to_projector(c, p) - sim::camera_to_projector(camera, projector, p)));
     }
   }
   return worst;
@@ -275,7 +274,7 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
     CHECK(log.find("calibration ok") != std::string::npos);
     CHECK(log.find("could not be decoded") != std::string::npos);
     REQUIRE(rig.published.has_value());
-    const calibration_t saved = cal::load_calibration(output);
+    const calibration_t saved = board::load_calibration(output);
     CHECK(saved.utime == rig.published->utime);
     const double worst = max_mapping_error(saved, camera, projector);
     INFO("max mapping error " << worst);
@@ -361,7 +360,7 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
 double calibrated_x(const calibration_t& c, const sim::CameraSetup& camera, double x) {
   const BoardGeometry& g = camera.board;
   const cv::Point2d p = sim::rectified_to_camera(camera, {g.to_px_x(x), g.to_px_y(0.2)});
-  return cal::camera_to_board(c, p).x;
+  return board::camera_to_board(c, p).x;
 }
 
 TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of a projector mounted larger than nominal") {
@@ -380,7 +379,7 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
     INFO(slurp(child.stderr_path));
     REQUIRE(code == 0);
   }
-  const calibration_t before = cal::load_calibration(output);
+  const calibration_t before = board::load_calibration(output);
   INFO("board x of true x = 3 before: " << calibrated_x(before, camera, 3.0));
   CHECK(std::abs(calibrated_x(before, camera, 3.0) - 3.0) > 0.2);  // the projector's scale error
 
@@ -398,7 +397,7 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
     CHECK(log.find("board scale corrected") != std::string::npos);
     CHECK(log.find("could not be decoded") != std::string::npos);
     REQUIRE(rig.published.has_value());
-    const calibration_t after = cal::load_calibration(output);
+    const calibration_t after = board::load_calibration(output);
     CHECK(after.utime == rig.published->utime);
     for (double x : {-3.0, -1.0, 0.0, 1.0, 2.0, 3.0}) {
       INFO("x " << x);
@@ -411,7 +410,7 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
   }
   {
     // Measured again: a correction below --scale-min-change, the file is left as it is.
-    const calibration_t corrected = cal::load_calibration(output);
+    const calibration_t corrected = board::load_calibration(output);
     FakeRig rig(camera, projector);
     rig.set_scene(blocks);
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--scale-from-blocks"}, temp("again.err"));
@@ -420,11 +419,11 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
     INFO(log);
     CHECK(code == 0);
     CHECK(log.find("left as it is") != std::string::npos);
-    CHECK(cal::load_calibration(output).utime == corrected.utime);
+    CHECK(board::load_calibration(output).utime == corrected.utime);
   }
   {
     // An empty board: nothing to measure, a message saying what to do, the file untouched.
-    const calibration_t corrected = cal::load_calibration(output);
+    const calibration_t corrected = board::load_calibration(output);
     FakeRig rig(camera, projector);
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--scale-from-blocks", "--scale-frames", "4"},
                               temp("empty.err"));
@@ -433,7 +432,7 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
     INFO(log);
     CHECK(code == 1);
     CHECK(log.find("stand 3 or more blocks on the bottom row") != std::string::npos);
-    CHECK(cal::load_calibration(output).utime == corrected.utime);
+    CHECK(board::load_calibration(output).utime == corrected.utime);
   }
   {
     // --serve serves a rewritten file (e.g. after --scale-from-blocks in another process) without a restart.
@@ -441,9 +440,9 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--serve", "--republish", "0.3"},
                               temp("reload.err"));
     REQUIRE(rig.run_until([&] { return rig.published.has_value(); }, 10));
-    calibration_t rewritten = cal::load_calibration(output);
+    calibration_t rewritten = board::load_calibration(output);
     rewritten.utime += 1000;
-    cal::save_calibration(output, rewritten);
+    board::save_calibration(output, rewritten);
     const bool served = rig.run_until([&] { return rig.published->utime == rewritten.utime; }, 5);
     kill(child.pid, SIGTERM);
     int status = 0;
@@ -475,9 +474,9 @@ TEST_CASE("bricklayer-calibrate --serve waits for a calibration file that is not
   rig.run_until([] { return false; }, 0.5);
   CHECK(rig.patterns_shown == 0);
 
-  calibration_t written = cal::default_calibration();
+  calibration_t written = board::default_calibration();
   written.utime = 4242;
-  cal::save_calibration(output, written);
+  board::save_calibration(output, written);
   const bool served = rig.run_until([&] { return rig.published.has_value(); }, 5);
   kill(child.pid, SIGTERM);
   waitpid(child.pid, &status, 0);
@@ -542,7 +541,7 @@ TEST_CASE("bricklayer-calibrate refuses bad flags and a bad calibration file") {
   int status = 0;
   waitpid(child.pid, &status, 0);
   CHECK(WEXITSTATUS(status) == 0);
-  const calibration_t d = cal::load_calibration(written);
+  const calibration_t d = board::load_calibration(written);
   CHECK(d.projector_width == 1024);
   std::remove(written.c_str());
 }
@@ -583,7 +582,7 @@ TEST_CASE("bricklayer-calibrate with the real bricklayer-projection (headless) a
     CHECK(log.find("but --projector-size is 800x600") != std::string::npos);
   }
   CHECK(rig.patterns_shown >= 6);
-  const calibration_t saved = cal::load_calibration(output);
+  const calibration_t saved = board::load_calibration(output);
   const double worst = max_mapping_error(saved, camera, projector);
   INFO("max mapping error " << worst);
   CHECK(worst < 1.5);

@@ -8,12 +8,14 @@
 #include <iostream>
 
 #include "bricklayer/calibration/calibrator.h"
-#include "bricklayer/calibration/calibration_file.h"
-#include "bricklayer/calibration/mapping.h"
-#include "bricklayer/calibration/patterns.h"
+#include "bricklayer/board/calibration_file.h"
+#include "bricklayer/board/mapping.h"
+#include "bricklayer/patterns/patterns.h"
 #include "bricklayer/simcam/render.h"
 
 namespace cal = bricklayer::calibration;
+namespace board = bricklayer::board;
+namespace patterns = bricklayer::patterns;
 namespace sim = bricklayer::simcam;
 
 namespace {
@@ -24,7 +26,7 @@ std::vector<cv::Mat> capture(const sim::Renderer& renderer, const std::vector<ca
   std::vector<cv::Mat> frames;
   const bricklayer::core::Stack empty;
   for (size_t i = 0; i < steps.size(); ++i) {
-    const cv::Mat shown = cal::render_pattern(steps[i].command, renderer.projector().size);
+    const cv::Mat shown = patterns::render_pattern(steps[i].command, renderer.projector().size);
     frames.push_back(renderer.render(empty, nuisance, &shown, seed * 100 + i).bgr);
   }
   return frames;
@@ -47,7 +49,7 @@ MappingError mapping_error(const bricklayer::calibration_t& c, const sim::Camera
       const cv::Point2d cam = sim::rectified_to_camera(camera, {x, y});
       if (cam.x < 2 || cam.y < 2 || cam.x > camera.size.width - 3 || cam.y > camera.size.height - 3) continue;
       const cv::Point2d truth = sim::camera_to_projector(camera, projector, cam);
-      const double d = cv::norm(cal::camera_to_projector(c, cam) - truth);
+      const double d = cv::norm(board::camera_to_projector(c, cam) - truth);
       sum += d;
       e.max = std::max(e.max, d);
       ++e.points;
@@ -77,7 +79,7 @@ TEST_CASE("Twenty random setups: mapping within 0.5 px mean / 1.5 px max, colour
     const cal::CalibrationResult result = cal::compute_calibration(frames, options, 1000);
     INFO("seed " << seed << ": " << result.message);
     REQUIRE(result.status == cal::CalibrationStatus::kOk);
-    REQUIRE_NOTHROW(cal::validate_calibration(result.calibration));
+    REQUIRE_NOTHROW(board::validate_calibration(result.calibration));
     CHECK(result.shelf.found);
 
     const MappingError e = mapping_error(result.calibration, camera, projector);
@@ -89,7 +91,7 @@ TEST_CASE("Twenty random setups: mapping within 0.5 px mean / 1.5 px max, colour
     worst_max = std::max(worst_max, e.max);
 
     // Colour: every entry within 5% of the largest (the diagonal), and the diagonal within 5% of itself.
-    const cv::Matx33d m = cal::colour_mixing(result.calibration);
+    const cv::Matx33d m = board::colour_mixing(result.calibration);
     const double scale = std::max({projector.mixing(0, 0), projector.mixing(1, 1), projector.mixing(2, 2)});
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 3; ++j) {
@@ -114,7 +116,7 @@ TEST_CASE("Self-check catches a moved camera and passes an unmoved one") {
   const auto result = cal::compute_calibration(capture(renderer, cal::calibration_steps(options), calibration_nuisance(), seed), options, 1);
   REQUIRE(result.status == cal::CalibrationStatus::kOk);
 
-  const cv::Mat check = cal::render_pattern(cal::self_check_command(), projector.size);
+  const cv::Mat check = patterns::render_pattern(cal::self_check_command(), projector.size);
   const bricklayer::core::Stack empty;
   const auto unmoved = cal::self_check(result.calibration, renderer.render(empty, calibration_nuisance(), &check, 99).bgr);
   INFO(unmoved.message);
@@ -212,7 +214,7 @@ TEST_CASE("The board frame: exact with a square projector, shelf-anchored with a
         for (double x = 10; x <= 630; x += 20) {
           const cv::Point2d p = sim::rectified_to_camera(camera, {x, y});
           if (p.x < 2 || p.y < 2 || p.x > 637 || p.y > 477) continue;
-          worst = std::max(worst, cv::norm(cal::camera_to_board(result.calibration, p) - true_board(camera, p)));
+          worst = std::max(worst, cv::norm(board::camera_to_board(result.calibration, p) - true_board(camera, p)));
         }
       }
       INFO("worst board error " << worst << " block lengths");
@@ -229,7 +231,7 @@ TEST_CASE("The board frame: exact with a square projector, shelf-anchored with a
       // projector's (not observable on an empty board).
       const auto at = [&](double bx, double by) {
         const cv::Point2d r(camera.board.to_px_x(bx), camera.board.to_px_y(by));
-        return cal::camera_to_board(result.calibration, sim::rectified_to_camera(camera, r));
+        return board::camera_to_board(result.calibration, sim::rectified_to_camera(camera, r));
       };
       const cv::Point2d origin = at(0, 0);
       INFO("origin maps to " << origin);

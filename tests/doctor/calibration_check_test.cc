@@ -4,7 +4,7 @@
 
 #include <filesystem>
 
-#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/board/calibration_file.h"
 #include "bricklayer/doctor/calibration_check.h"
 #include "doctor_test_util.h"
 
@@ -26,9 +26,9 @@ TEST_CASE("calibration: fresh ok, missing and corrupt fail, old warns, another p
   CHECK(missing.detail.find("does not exist: vision publishes no stacks") != std::string::npos);
   CHECK(missing.fix.find("bricklayer-calibrate --output " + plan.calibration_file) != std::string::npos);
 
-  calibration_t cal = calibration::default_calibration();
+  calibration_t cal = board::default_calibration();
   cal.utime = now - 2 * day;
-  calibration::save_calibration(plan.calibration_file, cal);
+  board::save_calibration(plan.calibration_file, cal);
   auto fresh = doctor::check_calibration(plan, now, 30);
   INFO(fresh.detail);
   CHECK(fresh.severity == Severity::kOk);

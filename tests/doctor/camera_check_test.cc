@@ -11,7 +11,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "../frames/fake_control_device.h"
-#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/board/calibration_file.h"
 #include "bricklayer/frames/camera_controls.h"
 #include "bricklayer/doctor/camera_check.h"
 #include "doctor_test_util.h"
@@ -76,8 +76,8 @@ TEST_CASE("a folder of 320x240 images against a calibration made for 640x480 fai
   auto dir = test::temp_dir("folder");
   fs::create_directories(dir / "frames");
   for (int k = 0; k < 3; ++k) cv::imwrite((dir / "frames" / ("f" + std::to_string(k) + ".png")).string(), cv::Mat(240, 320, CV_8UC3, cv::Scalar::all(90)));
-  auto cal = calibration::default_calibration();  // camera 640x480
-  calibration::save_calibration((dir / "calibration.json").string(), cal);
+  auto cal = board::default_calibration();  // camera 640x480
+  board::save_calibration((dir / "calibration.json").string(), cal);
   auto r = run_doctor({camera_profile(dir, "--images", (dir / "frames").string(), (dir / "calibration.json").string()), "--checks", "camera"});
   INFO(r.out);
   const std::string line = check_line(r.out, "camera");

@@ -3,7 +3,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {

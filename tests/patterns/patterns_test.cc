@@ -9,10 +9,10 @@
 
 #include <map>
 
-#include "bricklayer/calibration/patterns.h"
+#include "bricklayer/patterns/patterns.h"
 
 using bricklayer::command_t;
-namespace cal = bricklayer::calibration;
+namespace patterns = bricklayer::patterns;
 
 namespace {
 command_t pattern_command(int32_t pattern, int32_t index) {
@@ -30,10 +30,10 @@ TEST_CASE("Gray-code images equal OpenCV's structured_light sequence") {
     auto gcp = cv::structured_light::GrayCodePattern::create(size.width, size.height);
     std::vector<cv::Mat> expected;
     REQUIRE(gcp->generate(expected));
-    REQUIRE(static_cast<int>(expected.size()) == cal::gray_code_image_count(size));
-    REQUIRE(static_cast<int>(gcp->getNumberOfPatternImages()) == cal::gray_code_image_count(size));
-    for (int i = 0; i < cal::gray_code_image_count(size); ++i) {
-      const cv::Mat bgr = cal::render_pattern(pattern_command(command_t::PATTERN_GRAY_CODE, i), size);
+    REQUIRE(static_cast<int>(expected.size()) == patterns::gray_code_image_count(size));
+    REQUIRE(static_cast<int>(gcp->getNumberOfPatternImages()) == patterns::gray_code_image_count(size));
+    for (int i = 0; i < patterns::gray_code_image_count(size); ++i) {
+      const cv::Mat bgr = patterns::render_pattern(pattern_command(command_t::PATTERN_GRAY_CODE, i), size);
       REQUIRE(bgr.type() == CV_8UC3);
       REQUIRE(bgr.size() == size);
       cv::Mat gray;
@@ -48,9 +48,9 @@ TEST_CASE("Gray-code images decode to every projector pixel with OpenCV's decode
   const cv::Size size(64, 32);
   auto gcp = cv::structured_light::GrayCodePattern::create(size.width, size.height);
   std::vector<cv::Mat> captured;
-  for (int i = 0; i < cal::gray_code_image_count(size); ++i) {
+  for (int i = 0; i < patterns::gray_code_image_count(size); ++i) {
     cv::Mat gray;
-    cv::cvtColor(cal::render_pattern(pattern_command(command_t::PATTERN_GRAY_CODE, i), size), gray, cv::COLOR_BGR2GRAY);
+    cv::cvtColor(patterns::render_pattern(pattern_command(command_t::PATTERN_GRAY_CODE, i), size), gray, cv::COLOR_BGR2GRAY);
     captured.push_back(gray);
   }
   for (int y = 0; y < size.height; y += 3) {
@@ -60,9 +60,9 @@ TEST_CASE("Gray-code images decode to every projector pixel with OpenCV's decode
       REQUIRE(p == cv::Point(x, y));
     }
   }
-  CHECK_THROWS_AS(cal::render_pattern(pattern_command(command_t::PATTERN_GRAY_CODE, cal::gray_code_image_count(size)), size),
+  CHECK_THROWS_AS(patterns::render_pattern(pattern_command(command_t::PATTERN_GRAY_CODE, patterns::gray_code_image_count(size)), size),
                   std::invalid_argument);
-  CHECK_THROWS_AS(cal::render_pattern(pattern_command(command_t::PATTERN_GRAY_CODE, -1), size), std::invalid_argument);
+  CHECK_THROWS_AS(patterns::render_pattern(pattern_command(command_t::PATTERN_GRAY_CODE, -1), size), std::invalid_argument);
 }
 
 TEST_CASE("Every marker set is detected at its layout position") {
@@ -70,10 +70,10 @@ TEST_CASE("Every marker set is detected at its layout position") {
   auto dict = cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_250);
   auto params = cv::aruco::DetectorParameters::create();
   params->cornerRefinementMethod = cv::aruco::CORNER_REFINE_SUBPIX;
-  for (int set = 0; set < cal::kMarkerSetCount; ++set) {
-    const auto layout = cal::marker_layout(set, size);
+  for (int set = 0; set < patterns::kMarkerSetCount; ++set) {
+    const auto layout = patterns::marker_layout(set, size);
     REQUIRE(layout.size() >= 5);
-    cv::Mat image = cal::render_pattern(pattern_command(command_t::PATTERN_MARKERS, set), size);
+    cv::Mat image = patterns::render_pattern(pattern_command(command_t::PATTERN_MARKERS, set), size);
     std::vector<int> ids;
     std::vector<std::vector<cv::Point2f>> corners;
     cv::aruco::detectMarkers(image, dict, corners, ids, params);
@@ -89,7 +89,7 @@ TEST_CASE("Every marker set is detected at its layout position") {
       }
     }
   }
-  CHECK_THROWS_AS(cal::marker_layout(cal::kMarkerSetCount, size), std::invalid_argument);
+  CHECK_THROWS_AS(patterns::marker_layout(patterns::kMarkerSetCount, size), std::invalid_argument);
 }
 
 TEST_CASE("Solid colours, chessboard corners and bad commands") {
@@ -98,13 +98,13 @@ TEST_CASE("Solid colours, chessboard corners and bad commands") {
   cmd.red = 300;
   cmd.green = 10;
   cmd.blue = -4;
-  const cv::Mat solid = cal::render_pattern(cmd, size);
+  const cv::Mat solid = patterns::render_pattern(cmd, size);
   CHECK(solid.at<cv::Vec3b>(100, 100) == cv::Vec3b(0, 10, 255));
 
-  const cv::Mat chess = cal::render_pattern(pattern_command(command_t::PATTERN_CHESSBOARD, 0), size);
+  const cv::Mat chess = patterns::render_pattern(pattern_command(command_t::PATTERN_CHESSBOARD, 0), size);
   std::vector<cv::Point2f> corners;
-  REQUIRE(cv::findChessboardCorners(chess, cal::chessboard_inner_corners(size), corners));
-  const auto expected = cal::chessboard_corner_positions(size);
+  REQUIRE(cv::findChessboardCorners(chess, patterns::chessboard_inner_corners(size), corners));
+  const auto expected = patterns::chessboard_corner_positions(size);
   REQUIRE(corners.size() == expected.size());
   // Either order (OpenCV may report it reversed: see NOTES); the positions as a set must agree.
   const bool forward = cv::norm(corners.front() - expected.front()) < 1.0;
@@ -113,6 +113,6 @@ TEST_CASE("Solid colours, chessboard corners and bad commands") {
     CHECK(cv::norm(corners[i] - e) < 1.0);
   }
 
-  CHECK_THROWS_AS(cal::render_pattern(pattern_command(99, 0), size), std::invalid_argument);
-  CHECK_THROWS_AS(cal::render_pattern(pattern_command(command_t::PATTERN_SOLID, 0), cv::Size(0, 0)), std::invalid_argument);
+  CHECK_THROWS_AS(patterns::render_pattern(pattern_command(99, 0), size), std::invalid_argument);
+  CHECK_THROWS_AS(patterns::render_pattern(pattern_command(command_t::PATTERN_SOLID, 0), cv::Size(0, 0)), std::invalid_argument);
 }

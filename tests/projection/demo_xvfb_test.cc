@@ -15,7 +15,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 #include "bricklayer/launcher/process.h"
 #include "../bus/bus_test_util.h"
 

@@ -21,7 +21,7 @@
 #include "bricklayer/common/module.h"
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/prediction_t.hpp"
-#include "bricklayer/projection/board_to_projector.h"
+#include "bricklayer/board/board_to_projector.h"
 #include "bricklayer/projection/game_renderer.h"
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/round_t.hpp"
@@ -101,9 +101,9 @@ struct Bus {
 
 // The snapshot pixel at the centre of a block of the stack drawn with the default (uncalibrated) mapping.
 cv::Vec3b centre_pixel(const cv::Mat& frame, int row, double x) {
-  const projection::BoardToProjector mapping;
+  const board::BoardToProjector mapping;
   const double h = 1.0 / 3.0;
-  const projection::Point2 p = mapping.map(x + 0.5, (row + 0.5) * h);
+  const board::Point2 p = mapping.map(x + 0.5, (row + 0.5) * h);
   return frame.at<cv::Vec3b>(static_cast<int>(p.y), static_cast<int>(p.x));
 }
 

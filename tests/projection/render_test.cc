@@ -10,7 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 #include "bricklayer/projection/display.h"
 #include "bricklayer/projection/projection_app.h"
 
@@ -23,7 +23,7 @@ struct Fixture {
   Display display{DisplayOptions{DisplayMode::kHeadless, 0, 1024, 768, false, "test", ""}};
   GameRenderer renderer{display.renderer(), 1024, 768};
 
-  cv::Mat draw(const Scene& scene, const BoardToProjector& mapping, const Hud& hud, int64_t anim_ms = 0) {
+  cv::Mat draw(const Scene& scene, const board::BoardToProjector& mapping, const Hud& hud, int64_t anim_ms = 0) {
     display.begin_frame();
     renderer.draw_game(scene, mapping, hud, anim_ms);
     display.present();
@@ -65,11 +65,11 @@ prediction_t make_prediction(int64_t frame, std::vector<std::pair<int64_t, int8_
 cv::Vec3b bgr(Rgb c) { return cv::Vec3b(c.b, 0, c.r); }
 
 // Every pixel of a 7x7 grid inside the block (10% in from its edges) has the expected colour.
-void check_block_colour(const cv::Mat& frame, const BoardToProjector& m, const SceneBlock& b, Rgb expected) {
+void check_block_colour(const cv::Mat& frame, const board::BoardToProjector& m, const SceneBlock& b, Rgb expected) {
   for (int i = 1; i <= 7; ++i) {
     for (int j = 1; j <= 7; ++j) {
       const double fx = 0.1 + 0.8 * (i - 1) / 6.0, fy = 0.1 + 0.8 * (j - 1) / 6.0;
-      const Point2 p = m.map(b.x + fx, b.y + fy * b.height);
+      const board::Point2 p = m.map(b.x + fx, b.y + fy * b.height);
       const int u = static_cast<int>(std::lround(p.x)), v = static_cast<int>(std::lround(p.y));
       REQUIRE(u >= 0);
       REQUIRE(v >= 0);
@@ -121,7 +121,7 @@ TEST_CASE("every block is filled with its predicted colour where the default map
   scene.set_prediction(make_prediction(3, {{1, block_prediction_t::STATE_STABLE},
                                           {2, block_prediction_t::STATE_MOVING},
                                           {3, block_prediction_t::STATE_CAUSE}}));
-  BoardToProjector mapping;
+  board::BoardToProjector mapping;
   cv::Mat frame = f.draw(scene, mapping, hud_for(scene));
   save_for_review(frame, "blocks-default.png");
   REQUIRE(frame.size() == cv::Size(1024, 768));
@@ -131,7 +131,7 @@ TEST_CASE("every block is filled with its predicted colour where the default map
   check_block_colour(frame, mapping, blocks[2], kCauseRed);
   check_block_colour(frame, mapping, blocks[3], kUnknownDimBlue);  // no prediction for id 4
   // Between the blocks and outside them the board stays dark: right of block 3, left of the pile.
-  const Point2 beyond = mapping.map(1.9, 5.0 / 6.0);
+  const board::Point2 beyond = mapping.map(1.9, 5.0 / 6.0);
   CHECK(frame.at<cv::Vec3b>(static_cast<int>(beyond.y), static_cast<int>(beyond.x)) == cv::Vec3b(0, 0, 0));
   CHECK(green_pixels(frame) == 0);
 }
@@ -142,7 +142,7 @@ TEST_CASE("a prediction for an older frame keeps its colours on the newest stack
   scene.set_stack(make_stack(10, {{1, 0, -0.5}, {2, 1, 0.0}}));
   scene.set_prediction(make_prediction(10, {{1, 0}, {2, 2}}));
   scene.set_stack(make_stack(11, {{1, 0, -0.5}, {2, 1, 0.05}, {3, 2, 0.3}}));
-  BoardToProjector mapping;
+  board::BoardToProjector mapping;
   cv::Mat frame = f.draw(scene, mapping, hud_for(scene));
   check_block_colour(frame, mapping, scene.blocks()[0], kStableBlue);
   check_block_colour(frame, mapping, scene.blocks()[1], kCauseRed);
@@ -156,14 +156,14 @@ TEST_CASE("blocks follow a calibrated mapping") {
   scene.set_prediction(make_prediction(1, {{1, 2}, {2, 0}}));
   // A projector that is shifted, slightly scaled and keystoned relative to the camera.
   const std::array<double, 9> c2p = {1.5, 0.02, 40, -0.01, 1.45, 30, 1e-5, 2e-5, 1};
-  BoardToProjector mapping = BoardToProjector::from_homographies(c2p, BoardGeometry{}.camera_to_board());
+  board::BoardToProjector mapping = board::BoardToProjector::from_homographies(c2p, BoardGeometry{}.camera_to_board());
   cv::Mat frame = f.draw(scene, mapping, hud_for(scene));
   save_for_review(frame, "blocks-calibrated.png");
   check_block_colour(frame, mapping, scene.blocks()[0], kCauseRed);
   check_block_colour(frame, mapping, scene.blocks()[1], kStableBlue);
   // Where the default mapping would have put block 1 is not all red any more.
-  BoardToProjector uncalibrated;
-  const Point2 old = uncalibrated.map(-0.45, 0.03);
+  board::BoardToProjector uncalibrated;
+  const board::Point2 old = uncalibrated.map(-0.45, 0.03);
   CHECK(frame.at<cv::Vec3b>(static_cast<int>(old.y), static_cast<int>(old.x)) != bgr(kCauseRed));
 }
 
@@ -173,7 +173,7 @@ TEST_CASE("score, MAX, closeness and timer are drawn as text, top right and top 
   scene.set_stack(make_stack(1, {{1, 0, -0.25}, {2, 1, 0.1}}));
   scene.set_prediction(make_prediction(1, {{1, 0}, {2, 0}}));
   Hud hud = hud_for(scene);
-  cv::Mat frame = f.draw(scene, BoardToProjector{}, hud);
+  cv::Mat frame = f.draw(scene, board::BoardToProjector{}, hud);
   const Layout layout = f.renderer.layout();
   CHECK(lit_pixels(frame, layout.score) > 500);
   CHECK(lit_pixels(frame, layout.max) > 300);
@@ -190,7 +190,7 @@ TEST_CASE("score, MAX, closeness and timer are drawn as text, top right and top 
 
   // No best-overhang table entry: that line is simply not drawn.
   hud.best_overhang.reset();
-  cv::Mat without = f.draw(scene, BoardToProjector{}, hud);
+  cv::Mat without = f.draw(scene, board::BoardToProjector{}, hud);
   CHECK(f.renderer.layout().best.w == 0);
   CHECK(lit_pixels(without, layout.best) < lit_pixels(frame, layout.best));
 }
@@ -216,7 +216,7 @@ TEST_CASE("the miniature shows the pile with its colours, the collapse ghost and
   hint.xs = {-0.7};
   scene.set_hint(hint);
   Hud hud = hud_for(scene);
-  cv::Mat frame = f.draw(scene, BoardToProjector{}, hud, /*anim_ms=*/250);
+  cv::Mat frame = f.draw(scene, board::BoardToProjector{}, hud, /*anim_ms=*/250);
   save_for_review(frame, "minimap.png");
   const SDL_Rect box = f.renderer.layout().minimap;
   REQUIRE(box.w > 100);
@@ -233,7 +233,7 @@ TEST_CASE("the miniature shows the pile with its colours, the collapse ghost and
   CHECK(count(kGhost) > 20);
   CHECK(green_pixels(frame) == 0);
   // The animation moves: another time, another picture.
-  cv::Mat later = f.draw(scene, BoardToProjector{}, hud, 1000);
+  cv::Mat later = f.draw(scene, board::BoardToProjector{}, hud, 1000);
   CHECK(cv::norm(frame, later, cv::NORM_L1) > 0);
   CHECK(green_pixels(later) == 0);
 }
@@ -244,7 +244,7 @@ TEST_CASE("an ended round and an empty board also keep green at 0") {
   Hud hud;
   hud.round_state = RoundClock::State::kEnded;
   hud.max_score = 123;
-  cv::Mat frame = f.draw(scene, BoardToProjector{}, hud);
+  cv::Mat frame = f.draw(scene, board::BoardToProjector{}, hud);
   CHECK(green_pixels(frame) == 0);
   CHECK(lit_pixels(frame, f.renderer.layout().round_label) > 50);  // "TIME UP"
 }

@@ -22,7 +22,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "../common/spawn_util.h"
-#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/board/calibration_file.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/module.h"
 #include "bricklayer/heartbeat_t.hpp"
@@ -99,7 +99,7 @@ TEST_CASE("vision takes bricklayer-calibrate's calibration file and refuses a ma
   simcam::Renderer renderer;
   cv::imwrite((dir / "images" / "frame0.png").string(), renderer.render(stack, simcam::Nuisance::level(1), nullptr, 3).bgr);
   // The default calibration describes the default camera simcam renders: same blocks through the calibrated path.
-  calibration::save_calibration((dir / "calibration.json").string(), calibration::default_calibration());
+  board::save_calibration((dir / "calibration.json").string(), board::default_calibration());
   int code = -1;
   std::string out = run_capture(test::program("bricklayer-vision") + " --images " + (dir / "images").string() +
                                     " --calibration " + (dir / "calibration.json").string() + " --json",
@@ -165,7 +165,7 @@ TEST_CASE("with --require-calibration vision publishes nothing until a calibrati
   CHECK(status == "waiting for a calibration");
 
   // The default calibration describes the default camera simcam renders.
-  const calibration_t calibration = calibration::default_calibration();
+  const calibration_t calibration = board::default_calibration();
   m.publish(channel(kCalibrationChannel), calibration);
   stream(1.0, nullptr);
   REQUIRE(!stacks.empty());

@@ -1,4 +1,4 @@
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 
 #include <cmath>
 #include <fstream>

@@ -1,12 +1,12 @@
-#include "bricklayer/projection/board_to_projector.h"
+#include "bricklayer/board/board_to_projector.h"
 
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 
-namespace bricklayer::projection {
+namespace bricklayer::board {
 
 std::array<double, 9> multiply3(const std::array<double, 9>& a, const std::array<double, 9>& b) {
   std::array<double, 9> c{};
@@ -57,10 +57,24 @@ BoardToProjector BoardToProjector::from_calibration(const calibration_t& calibra
   return from_homographies(c2p, c2b);
 }
 
+BoardToProjector BoardToProjector::for_projector(const calibration_t& calibration, int width, int height) {
+  if (calibration.projector_width <= 0 || calibration.projector_height <= 0 ||
+      (calibration.projector_width == width && calibration.projector_height == height))
+    return from_calibration(calibration);
+  const double sx = static_cast<double>(width) / calibration.projector_width;
+  const double sy = static_cast<double>(height) / calibration.projector_height;
+  std::array<double, 9> c2p{}, c2b{};
+  for (int k = 0; k < 9; ++k) {
+    c2p[k] = calibration.camera_to_projector[k];
+    c2b[k] = calibration.camera_to_board[k];
+  }
+  return from_homographies(multiply3({sx, 0, 0, 0, sy, 0, 0, 0, 1}, c2p), c2b);
+}
+
 Point2 BoardToProjector::map(double board_x, double board_y) const {
   const double w = h_[6] * board_x + h_[7] * board_y + h_[8];
   if (!(std::abs(w) > 1e-12)) return {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
   return {(h_[0] * board_x + h_[1] * board_y + h_[2]) / w, (h_[3] * board_x + h_[4] * board_y + h_[5]) / w};
 }
 
-}  // namespace bricklayer::projection
+}  // namespace bricklayer::board

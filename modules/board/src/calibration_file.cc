@@ -1,4 +1,4 @@
-#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/board/calibration_file.h"
 
 #include <nlohmann/json.hpp>
 
@@ -12,10 +12,10 @@
 #include <set>
 #include <sstream>
 
-#include "bricklayer/calibration/mapping.h"
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
+#include "bricklayer/board/mapping.h"
 
-namespace bricklayer::calibration {
+namespace bricklayer::board {
 namespace {
 
 using nlohmann::json;
@@ -277,4 +277,4 @@ void save_calibration(const std::string& path, const bricklayer::calibration_t& 
   }
 }
 
-}  // namespace bricklayer::calibration
+}  // namespace bricklayer::board

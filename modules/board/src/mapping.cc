@@ -1,8 +1,8 @@
-#include "bricklayer/calibration/mapping.h"
+#include "bricklayer/board/mapping.h"
 
 #include <cmath>
 
-namespace bricklayer::calibration {
+namespace bricklayer::board {
 
 cv::Matx33d camera_matrix(const bricklayer::calibration_t& cal) {
   return {cal.camera_matrix[0], 0, cal.camera_matrix[2], 0, cal.camera_matrix[1], cal.camera_matrix[3], 0, 0, 1};
@@ -74,4 +74,4 @@ cv::Point2d camera_to_board(const bricklayer::calibration_t& cal, cv::Point2d ca
   return apply_homography(camera_to_board_h(cal), undistort_point(cal, camera_px));
 }
 
-}  // namespace bricklayer::calibration
+}  // namespace bricklayer::board

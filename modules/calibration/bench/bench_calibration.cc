@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "bricklayer/calibration/calibrator.h"
-#include "bricklayer/calibration/mapping.h"
-#include "bricklayer/calibration/patterns.h"
+#include "bricklayer/board/mapping.h"
+#include "bricklayer/patterns/patterns.h"
 #include "bricklayer/common/flags.h"
 #include "bricklayer/simcam/render.h"
 #include "bricklayer/detection/block_scale.h"
@@ -50,7 +50,7 @@ double board_x_error(const calibration_t& c, const sim::CameraSetup& camera) {
   for (double bx = -4; bx <= 4; bx += 0.25) {
     const cv::Point2d p = sim::rectified_to_camera(camera, {camera.board.to_px_x(bx), camera.board.to_px_y(0.2)});
     if (p.x < 2 || p.y < 2 || p.x > camera.size.width - 3 || p.y > camera.size.height - 3) continue;
-    worst = std::max(worst, std::abs(cal::camera_to_board(c, p).x - bx));
+    worst = std::max(worst, std::abs(board::camera_to_board(c, p).x - bx));
   }
   return worst;
 }
@@ -70,7 +70,7 @@ void mapping_error(const calibration_t& c, const sim::CameraSetup& camera, const
     for (double x = 10; x <= 630; x += 20) {
       const cv::Point2d p = sim::rectified_to_camera(camera, {x, y});
       if (p.x < 2 || p.y < 2 || p.x > camera.size.width - 3 || p.y > camera.size.height - 3) continue;
-      const double d = cv::norm(cal::camera_to_projector(c, p) - sim::camera_to_projector(camera, projector, p));
+      const double d = cv::norm(board::camera_to_projector(c, p) - sim::camera_to_projector(camera, projector, p));
       sum += d;
       max = std::max(max, d);
       ++n;
@@ -101,7 +101,7 @@ calibration_t from_fit(const cal::LensFit& fit, cv::Size camera, cv::Size projec
 // gives (camera pixel, centre of its 4-pixel projector stripe).
 std::vector<cal::Correspondence> gray_code_points(const sim::Renderer& r, const sim::Nuisance& n, uint64_t seed) {
   const cv::Size psize = r.projector().size;
-  const int total = cal::gray_code_image_count(psize);
+  const int total = patterns::gray_code_image_count(psize);
   constexpr int kSkipBits = 2;
   cv::Mat col_code, row_code, valid;
   const cv::Size csize = r.camera().size;
@@ -109,15 +109,15 @@ std::vector<cal::Correspondence> gray_code_points(const sim::Renderer& r, const 
   row_code = cv::Mat::zeros(csize, CV_32S);
   valid = cv::Mat(csize, CV_8U, cv::Scalar(1));
   for (int i = 0; i < total; i += 2) {
-    const cal::GrayCodeBit b = cal::gray_code_bit(i, psize);
+    const patterns::GrayCodeBit b = patterns::gray_code_bit(i, psize);
     if (b.bit < kSkipBits) continue;
     command_t cmd{};
     cmd.command = command_t::SHOW_PATTERN;
     cmd.pattern = command_t::PATTERN_GRAY_CODE;
     cmd.index = i;
-    const cv::Mat shown = cal::render_pattern(cmd, psize);
+    const cv::Mat shown = patterns::render_pattern(cmd, psize);
     cmd.index = i + 1;
-    const cv::Mat inverse = cal::render_pattern(cmd, psize);
+    const cv::Mat inverse = patterns::render_pattern(cmd, psize);
     cv::Mat a, bimg;
     cv::cvtColor(r.render(core::Stack{}, n, &shown, seed + i).bgr, a, cv::COLOR_BGR2GRAY);
     cv::cvtColor(r.render(core::Stack{}, n, &inverse, seed + i + 1).bgr, bimg, cv::COLOR_BGR2GRAY);
@@ -173,7 +173,7 @@ int Main(int argc, char** argv) {
     const sim::Renderer renderer(camera, projector);
     std::vector<cv::Mat> frames;
     for (size_t i = 0; i < steps.size(); ++i) {
-      const cv::Mat shown = cal::render_pattern(steps[i].command, projector.size);
+      const cv::Mat shown = patterns::render_pattern(steps[i].command, projector.size);
       frames.push_back(renderer.render(core::Stack{}, nuisance, &shown, seed * 100 + i).bgr);
     }
     const auto t0 = std::chrono::steady_clock::now();
@@ -186,7 +186,7 @@ int Main(int argc, char** argv) {
     }
     mapping_error(result.calibration, camera, projector, corners);
     {
-      const cv::Matx33d m = cal::colour_mixing(result.calibration);
+      const cv::Matx33d m = board::colour_mixing(result.calibration);
       const double scale = std::max({projector.mixing(0, 0), projector.mixing(1, 1), projector.mixing(2, 2)});
       double worst = 0;
       for (int i = 0; i < 9; ++i) worst = std::max(worst, std::abs(m.val[i] - projector.mixing.val[i]) / scale);
@@ -194,7 +194,7 @@ int Main(int argc, char** argv) {
       // Board frame: where the true origin (surface edge, surface top) lands, and how level the surface is.
       auto at = [&](double bx, double by) {
         const cv::Point2d r(camera.board.to_px_x(bx), camera.board.to_px_y(by));
-        return cal::camera_to_board(result.calibration, sim::rectified_to_camera(camera, r));
+        return board::camera_to_board(result.calibration, sim::rectified_to_camera(camera, r));
       };
       corners.shelf_found.push_back(result.shelf.found ? 1 : 0);
       corners.origin.push_back(cv::norm(at(0, 0)));
@@ -221,8 +221,8 @@ int Main(int argc, char** argv) {
     }
 
     // Centres only: the same detections without the corners.
-    auto points = cal::detect_marker_correspondences(frames[4], cal::kMarkerSetGrid, projector.size);
-    const auto more = cal::detect_marker_correspondences(frames[5], cal::kMarkerSetShiftedGrid, projector.size);
+    auto points = cal::detect_marker_correspondences(frames[4], patterns::kMarkerSetGrid, projector.size);
+    const auto more = cal::detect_marker_correspondences(frames[5], patterns::kMarkerSetShiftedGrid, projector.size);
     points.insert(points.end(), more.begin(), more.end());
     for (auto& p : points) p.has_corners = false;
     const auto t1 = std::chrono::steady_clock::now();

@@ -37,12 +37,12 @@
 #include <string>
 #include <vector>
 
-#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/board/calibration_file.h"
 #include "bricklayer/calibration/calibrator.h"
-#include "bricklayer/calibration/patterns.h"
+#include "bricklayer/patterns/patterns.h"
 #include "bricklayer/calibration_t.hpp"
 #include "bricklayer/command_t.hpp"
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/flags.h"
 #include "bricklayer/common/lcm_url.h"
@@ -229,7 +229,7 @@ class Calibrate {
       // it serves nothing until a good file is there, and never exits over it.
       file_time_ = file_time();
       try {
-        calibration_ = cal::load_calibration(options_.output);
+        calibration_ = board::load_calibration(options_.output);
         log::info("loaded ", options_.output, " (reprojection error mean ", calibration_->reprojection_error_mean_px, " px)");
       } catch (const std::exception& e) {
         if (std::filesystem::exists(options_.output)) ++module_.counters().errors;
@@ -238,7 +238,7 @@ class Calibrate {
         module_.set_status("no calibration yet: run bricklayer-calibrate");
       }
     } else if (mode_ != Mode::kCalibrate) {
-      calibration_ = cal::load_calibration(options_.output);
+      calibration_ = board::load_calibration(options_.output);
       log::info("loaded ", options_.output, " (reprojection error mean ", calibration_->reprojection_error_mean_px, " px)");
     }
     if (mode_ == Mode::kScale) {
@@ -308,7 +308,7 @@ class Calibrate {
 
   void start_self_check() {
     last_check_s_ = monotonic_s();
-    log::info("self-check: projecting ", cal::kMarkerSetSelfCheck == 2 ? "five" : "the", " check markers");
+    log::info("self-check: projecting ", patterns::kMarkerSetSelfCheck == 2 ? "five" : "the", " check markers");
     capture_ = std::make_unique<PatternCapture>(
         module_, std::vector<cal::CalibrationStep>{{cal::self_check_command(), "self-check markers"}}, options_);
   }
@@ -381,7 +381,7 @@ class Calibrate {
     }
     log::info(result.message);
     try {
-      cal::save_calibration(options_.output, result.calibration);
+      board::save_calibration(options_.output, result.calibration);
     } catch (const std::exception& e) {
       log::error(e.what());
       finish(kExitRejected);
@@ -467,7 +467,7 @@ class Calibrate {
     calibration_t corrected = detection::apply_board_correction(*calibration_, *fit);
     corrected.utime = wall_utime();
     try {
-      cal::save_calibration(options_.output, corrected);
+      board::save_calibration(options_.output, corrected);
     } catch (const std::exception& e) {
       log::error(e.what());
       finish(kExitRejected);
@@ -497,7 +497,7 @@ class Calibrate {
       return;
     }
     try {
-      calibration_ = cal::load_calibration(options_.output);
+      calibration_ = board::load_calibration(options_.output);
       log::info("re-read ", options_.output, ": it changed");
       module_.set_status("ok");
     } catch (const std::exception& e) {
@@ -549,7 +549,7 @@ int Main(int argc, char** argv) {
   flags.add_bool("serve", "publish the saved calibration and self-check on command SELF_CHECK when the board is empty");
   flags.add("self-check-every", "0", "--serve: also self-check automatically this often, seconds, once the board has been empty --empty-for seconds (0 = only on command)");
   flags.add("empty-for", "5", "--serve: seconds of empty board before an automatic self-check");
-  flags.add_bool("write-default", "write the uncalibrated default setup (common/board.h) to --output and exit");
+  flags.add_bool("write-default", "write the uncalibrated default setup (modules/board) to --output and exit");
   flags.add_bool("scale-from-blocks", "correct the saved calibration's board scale from 3+ blocks standing apart on the bottom row, save, publish and exit");
   flags.add("scale-frames", "10", "--scale-from-blocks: camera frames to measure");
   flags.add("scale-max-residual", "0.01", "--scale-from-blocks: refuse when the block lengths disagree with the fitted correction by more than this fraction (RMS)");
@@ -592,7 +592,7 @@ int Main(int argc, char** argv) {
     throw FlagError("--self-check, --serve and --scale-from-blocks exclude each other");
 
   if (flags.get_bool("write-default")) {
-    cal::save_calibration(options.output, cal::default_calibration());
+    board::save_calibration(options.output, board::default_calibration());
     log::info("wrote the uncalibrated default to ", options.output);
     return 0;
   }

@@ -12,11 +12,22 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "bricklayer/calibration/calibration_file.h"
-#include "bricklayer/calibration/mapping.h"
-#include "bricklayer/calibration/patterns.h"
+#include "bricklayer/board/calibration_file.h"
+#include "bricklayer/board/mapping.h"
+#include "bricklayer/patterns/patterns.h"
 
 namespace bricklayer::calibration {
+// The shared board and pattern libraries, by the short names the computation reads best with.
+using board::apply_homography;
+using board::camera_to_projector;
+using board::distort_point;
+using board::undistort_point;
+using board::validate_calibration;
+using patterns::kMarkerSetGrid;
+using patterns::kMarkerSetSelfCheck;
+using patterns::kMarkerSetShiftedGrid;
+using patterns::marker_layout;
+using patterns::MarkerPlacement;
 namespace {
 
 constexpr double kNominalFocalPerWidth = 0.875;  // 560 px at 640: a typical webcam; see header

@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/board/calibration_file.h"
 
 namespace bricklayer::doctor {
 
@@ -17,7 +17,7 @@ CheckResult check_calibration(const HostPlan& plan, int64_t now_utime, double ma
     return CheckResult::failed(name, plan.calibration_file + " does not exist: vision publishes no stacks without it", calibrate);
   bricklayer::calibration_t cal{};
   try {
-    cal = calibration::load_calibration(plan.calibration_file);
+    cal = board::load_calibration(plan.calibration_file);
   } catch (const std::exception& e) {
     return CheckResult::failed(name, e.what(), calibrate);
   }

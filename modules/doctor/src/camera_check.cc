@@ -11,7 +11,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/board/calibration_file.h"
 #include "bricklayer/frames/camera_controls.h"
 #include "bricklayer/frames/frame_source.h"
 #include "bricklayer/common/log.h"
@@ -35,7 +35,7 @@ struct WantedSize {
 WantedSize wanted_size(const HostPlan& plan) {
   if (!plan.calibration_file.empty()) {
     try {
-      auto cal = calibration::load_calibration(plan.calibration_file);
+      auto cal = board::load_calibration(plan.calibration_file);
       return {cal.camera_width, cal.camera_height, plan.calibration_file};
     } catch (const std::exception&) {
       // The calibration check reports a missing or bad file.

@@ -1,4 +1,4 @@
-#include "bricklayer/calibration/patterns.h"
+#include "bricklayer/patterns/patterns.h"
 
 #include <opencv2/aruco.hpp>
 #include <opencv2/imgproc.hpp>
@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace bricklayer::calibration {
+namespace bricklayer::patterns {
 namespace {
 
 int ceil_log2(int n) {
@@ -220,4 +220,4 @@ cv::Mat render_pattern(const bricklayer::command_t& cmd, cv::Size size) {
   }
 }
 
-}  // namespace bricklayer::calibration
+}  // namespace bricklayer::patterns

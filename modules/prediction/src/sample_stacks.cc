@@ -4,7 +4,7 @@
 #include <cmath>
 #include <random>
 
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 
 namespace bricklayer::prediction {
 

@@ -13,7 +13,7 @@ SDL_Color sdl_colour(Rgb c) { return SDL_Color{c.r, 0, c.b, 255}; }
 
 // Projector pixel coordinates have pixel centres at integers (OpenCV's convention, as calibration and
 // simcam use); SDL's pixel i covers [i, i+1].
-SDL_FPoint to_sdl(Point2 p) { return SDL_FPoint{static_cast<float>(p.x + 0.5), static_cast<float>(p.y + 0.5)}; }
+SDL_FPoint to_sdl(board::Point2 p) { return SDL_FPoint{static_cast<float>(p.x + 0.5), static_cast<float>(p.y + 0.5)}; }
 
 bool finite(const SDL_FPoint& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
 
@@ -93,14 +93,14 @@ void GameRenderer::outline(const SDL_FPoint* points, int count, Rgb colour) {
   SDL_RenderDrawLinesF(renderer_, points, count);
 }
 
-void GameRenderer::draw_game(const Scene& scene, const BoardToProjector& mapping, const Hud& hud, int64_t anim_ms) {
+void GameRenderer::draw_game(const Scene& scene, const board::BoardToProjector& mapping, const Hud& hud, int64_t anim_ms) {
   SDL_SetRenderDrawBlendMode(renderer_, SDL_BLENDMODE_NONE);
   draw_blocks(scene, mapping);
   draw_minimap(scene, anim_ms);
   draw_hud(hud);
 }
 
-void GameRenderer::draw_blocks(const Scene& scene, const BoardToProjector& mapping) {
+void GameRenderer::draw_blocks(const Scene& scene, const board::BoardToProjector& mapping) {
   for (const SceneBlock& b : scene.blocks()) {
     fill_quad({to_sdl(mapping.map(b.x, b.y)), to_sdl(mapping.map(b.x + 1, b.y)),
                to_sdl(mapping.map(b.x + 1, b.y + b.height)), to_sdl(mapping.map(b.x, b.y + b.height))},

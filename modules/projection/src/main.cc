@@ -10,7 +10,7 @@
 #include "bricklayer/common/flags.h"
 #include "bricklayer/common/lcm_url.h"
 #include "bricklayer/common/log.h"
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 #include "bricklayer/projection/projection_app.h"
 
 namespace {

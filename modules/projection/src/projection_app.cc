@@ -17,22 +17,12 @@
 #include "bricklayer/round_t.hpp"
 #include "bricklayer/timing_t.hpp"
 
-#ifdef BRICKLAYER_HAVE_CALIBRATION_PATTERNS
-#include "bricklayer/calibration/patterns.h"
-#endif
+#include "bricklayer/patterns/patterns.h"
 
 namespace bricklayer::projection {
 
 cv::Mat render_command_pattern(const command_t& command, int width, int height) {
-#ifdef BRICKLAYER_HAVE_CALIBRATION_PATTERNS
-  return calibration::render_pattern(command, cv::Size(width, height));
-#else
-  if (command.pattern != command_t::PATTERN_SOLID)
-    throw std::invalid_argument("pattern " + std::to_string(command.pattern) +
-                                " needs bricklayer::calibration_patterns, which this build lacks");
-  auto level = [](int v) { return static_cast<double>(std::clamp(v, 0, 255)); };
-  return cv::Mat(height, width, CV_8UC3, cv::Scalar(level(command.blue), level(command.green), level(command.red)));
-#endif
+  return patterns::render_pattern(command, cv::Size(width, height));
 }
 
 namespace {
@@ -208,7 +198,7 @@ void ProjectionApp::apply_inputs() {
   if (auto c = calibration_in_.take(); c && !(applied_calibration_ && same_message(*applied_calibration_, *c))) {
     applied_calibration_ = *c;
     try {
-      BoardToProjector mapping = BoardToProjector::from_calibration(*c);
+      board::BoardToProjector mapping = board::BoardToProjector::from_calibration(*c);
       if (c->projector_width > 0 && c->projector_height > 0 &&
           (c->projector_width != display_->width() || c->projector_height != display_->height())) {
         // The same projector at another resolution: scale its pixels to ours.
@@ -218,7 +208,7 @@ void ProjectionApp::apply_inputs() {
         for (int k = 0; k < 9; ++k) c2p[k] = c->camera_to_projector[k];
         std::array<double, 9> c2b{};
         for (int k = 0; k < 9; ++k) c2b[k] = c->camera_to_board[k];
-        mapping = BoardToProjector::from_homographies(multiply3({sx, 0, 0, 0, sy, 0, 0, 0, 1}, c2p), c2b);
+        mapping = board::BoardToProjector::from_homographies(board::multiply3({sx, 0, 0, 0, sy, 0, 0, 0, 1}, c2p), c2b);
         log::warn("calibration is for a ", c->projector_width, "x", c->projector_height, " projector; scaled to ",
                   display_->width(), "x", display_->height());
       }

@@ -24,10 +24,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "bricklayer/calibration/calibration_file.h"
+#include "bricklayer/board/calibration_file.h"
 #include "bricklayer/frames/frame_source.h"
 #include "bricklayer/frames/image_codec.h"
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/flags.h"
 #include "bricklayer/common/lcm_url.h"
@@ -124,7 +124,7 @@ class Vision {
     // modules catch up: the one in use is kept as it is (remap tables, temporal filter).
     if (calibration_ && same_message(*calibration_, calibration)) return;
     // Both throw on a bad calibration (a counted error; the previous calibration stays in use).
-    calibration::validate_calibration(calibration);
+    board::validate_calibration(calibration);
     detector_.set_calibration(calibration);
     calibration_ = calibration;
     filter_.reset();
@@ -276,7 +276,7 @@ int Main(int argc, char** argv) {
   std::optional<calibration_t> calibration;
   if (!flags.get("calibration").empty()) {
     // The strict loader bricklayer-calibrate's files are checked with; its errors name the file and key.
-    const calibration_t loaded = calibration::load_calibration(flags.get("calibration"));
+    const calibration_t loaded = board::load_calibration(flags.get("calibration"));
     try {
       detector.set_calibration(loaded);
     } catch (const std::invalid_argument& e) {

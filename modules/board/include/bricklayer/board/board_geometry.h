@@ -1,6 +1,8 @@
 // Board geometry in rectified board pixels, for a camera looking straight at the board (or after
 // calibration's rectification): where the surface edge and top are, and how big a block is.
 // This is the --board FILE of bricklayer-vision and the layout simcam renders.
+// Part of bricklayer::board (bricklayer::board_geometry alone needs no OpenCV). BoardGeometry and the
+// default setup stay in namespace bricklayer, beside the message types: every stage speaks them.
 #pragma once
 
 #include <array>

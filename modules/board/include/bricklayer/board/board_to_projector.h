@@ -4,7 +4,7 @@
 // (the convention of calibration_t.camera_to_board and BoardGeometry). Calibration gives two
 // homographies on undistorted camera pixels, so board -> projector = camera_to_projector *
 // inverse(camera_to_board); lens distortion does not enter. Until a calibration arrives the shared
-// uncalibrated default (common/board.h) is used, the same one simcam renders and vision assumes.
+// uncalibrated default (board_geometry.h) is used, the same one simcam renders and vision assumes.
 #pragma once
 
 #include <array>
@@ -12,7 +12,7 @@
 
 #include "bricklayer/calibration_t.hpp"
 
-namespace bricklayer::projection {
+namespace bricklayer::board {
 
 struct Point2 {
   double x = 0;
@@ -30,6 +30,9 @@ class BoardToProjector {
                                             const std::array<double, 9>& camera_to_board);
   // Same, from a calibration message (validated the same way).
   static BoardToProjector from_calibration(const calibration_t& calibration);
+  // From a calibration, for a projector showing width x height pixels: a calibration made for the same
+  // projector at another resolution (projector_width x projector_height) is scaled to ours.
+  static BoardToProjector for_projector(const calibration_t& calibration, int width, int height);
 
   // Projector pixel of a board point. A point on the horizon (w = 0) maps to NaN.
   Point2 map(double board_x, double board_y) const;
@@ -49,4 +52,4 @@ std::array<double, 9> multiply3(const std::array<double, 9>& a, const std::array
 // Throws std::invalid_argument when |det| is tiny relative to the entries.
 std::array<double, 9> invert3(const std::array<double, 9>& m);
 
-}  // namespace bricklayer::projection
+}  // namespace bricklayer::board

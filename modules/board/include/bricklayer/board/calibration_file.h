@@ -16,7 +16,7 @@
 
 #include "bricklayer/calibration_t.hpp"
 
-namespace bricklayer::calibration {
+namespace bricklayer::board {
 
 class CalibrationFileError : public std::runtime_error {
  public:
@@ -30,7 +30,7 @@ class CalibrationFileError : public std::runtime_error {
 // (0, 10], negative or inconsistent reprojection errors.
 void validate_calibration(const bricklayer::calibration_t& cal);
 
-// The uncalibrated default (common/board.h): a 640x480 camera with no lens distortion looking
+// The uncalibrated default (board_geometry.h): a 640x480 camera with no lens distortion looking
 // straight at the board, kDefaultCameraToProjector, the default BoardGeometry, and a typical colour
 // mixing (diagonal 0.55..0.6, red and blue leaking ~0.1 into green). Valid; utime 0.
 bricklayer::calibration_t default_calibration();
@@ -46,4 +46,4 @@ std::string calibration_to_json(const bricklayer::calibration_t& cal);  // valid
 bricklayer::calibration_t load_calibration(const std::string& path);
 void save_calibration(const std::string& path, const bricklayer::calibration_t& cal);
 
-}  // namespace bricklayer::calibration
+}  // namespace bricklayer::board

@@ -9,7 +9,7 @@
 
 #include "bricklayer/calibration_t.hpp"
 
-namespace bricklayer::calibration {
+namespace bricklayer::board {
 
 cv::Matx33d camera_matrix(const bricklayer::calibration_t& cal);
 cv::Vec<double, 5> distortion(const bricklayer::calibration_t& cal);
@@ -28,4 +28,4 @@ cv::Point2d camera_to_projector(const bricklayer::calibration_t& cal, cv::Point2
 cv::Point2d projector_to_camera(const bricklayer::calibration_t& cal, cv::Point2d projector_px);  // distorted px
 cv::Point2d camera_to_board(const bricklayer::calibration_t& cal, cv::Point2d camera_px);
 
-}  // namespace bricklayer::calibration
+}  // namespace bricklayer::board

@@ -12,7 +12,7 @@
 //   undistorts identically). Residuals are in camera pixels, where the detection noise lives;
 //   correspondences more than 3 px off after the first fit are dropped and the fit repeated.
 // - Board frame: the projector image defines a rectified frame (rectified pixel = projector pixel
-//   x camera_width / projector_width, the default setup of common/board.h) in which the
+//   x camera_width / projector_width, the default setup of board/board_geometry.h) in which the
 //   BoardGeometry (--board FILE or defaults) gives the block size. The shelf's top edge and its end
 //   are found in the projector's light (colour frames minus black: no shadows, no ambient), and
 //   the frame is rotated and shifted so that the shelf top is horizontal and its corner lands on the
@@ -30,7 +30,7 @@
 
 #include "bricklayer/calibration_t.hpp"
 #include "bricklayer/command_t.hpp"
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 
 namespace bricklayer::calibration {
 

@@ -13,7 +13,7 @@
 #include <opencv2/core.hpp>
 
 #include "bricklayer/calibration_t.hpp"
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 
 namespace bricklayer::detection {
 

@@ -21,7 +21,7 @@
 #include <opencv2/core.hpp>
 
 #include "bricklayer/calibration_t.hpp"
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 #include "bricklayer/detection/board_frame.h"
 
 namespace bricklayer::detection {

@@ -10,7 +10,7 @@
 
 #include "bricklayer/command_t.hpp"
 
-namespace bricklayer::calibration {
+namespace bricklayer::patterns {
 
 // Renders the pattern a SHOW_PATTERN command asks for, as a BGR (CV_8UC3) image of projector_size:
 // - PATTERN_SOLID: the whole image in (cmd.red, cmd.green, cmd.blue), each clamped to 0..255.
@@ -62,4 +62,4 @@ cv::Size chessboard_inner_corners(cv::Size projector_size);
 // Inner corner positions in projector pixels, row by row from the top-left.
 std::vector<cv::Point2f> chessboard_corner_positions(cv::Size projector_size);
 
-}  // namespace bricklayer::calibration
+}  // namespace bricklayer::patterns

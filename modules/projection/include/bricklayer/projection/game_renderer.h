@@ -15,7 +15,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "bricklayer/projection/board_to_projector.h"
+#include "bricklayer/board/board_to_projector.h"
 #include "bricklayer/projection/palette.h"
 #include "bricklayer/projection/round_clock.h"
 #include "bricklayer/projection/scene.h"
@@ -56,7 +56,7 @@ class GameRenderer {
   GameRenderer& operator=(const GameRenderer&) = delete;
 
   // anim_ms drives the collapse preview's animation (any monotonic milliseconds).
-  void draw_game(const Scene& scene, const BoardToProjector& mapping, const Hud& hud, int64_t anim_ms);
+  void draw_game(const Scene& scene, const board::BoardToProjector& mapping, const Hud& hud, int64_t anim_ms);
   // A BGR (CV_8UC3) or grey (CV_8UC1) image stretched over the whole projector image.
   void draw_pattern(const cv::Mat& image);
   const Layout& layout() const { return layout_; }
@@ -74,7 +74,7 @@ class GameRenderer {
   SDL_Rect draw_text(Slot slot, TTF_Font* font, const std::string& text, Rgb colour, int x, int y, int align);
   void fill_quad(const std::array<SDL_FPoint, 4>& corners, Rgb colour);
   void outline(const SDL_FPoint* points, int count, Rgb colour);
-  void draw_blocks(const Scene& scene, const BoardToProjector& mapping);
+  void draw_blocks(const Scene& scene, const board::BoardToProjector& mapping);
   void draw_hud(const Hud& hud);
   void draw_minimap(const Scene& scene, int64_t anim_ms);
 

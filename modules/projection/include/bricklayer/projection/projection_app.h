@@ -30,7 +30,7 @@
 #include "bricklayer/prediction_t.hpp"
 #include "bricklayer/projection/beeper.h"
 #include "bricklayer/projection/best_overhang.h"
-#include "bricklayer/projection/board_to_projector.h"
+#include "bricklayer/board/board_to_projector.h"
 #include "bricklayer/projection/display.h"
 #include "bricklayer/projection/game_renderer.h"
 #include "bricklayer/projection/red_debounce.h"
@@ -121,7 +121,7 @@ class ProjectionApp {
   Stamped prediction_stamp_{};
 
   Scene scene_;
-  BoardToProjector mapping_;
+  board::BoardToProjector mapping_;
   RoundClock round_;
   RedDebounce debounce_;
   std::optional<cv::Mat> pattern_;

@@ -36,7 +36,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "bricklayer/common/board.h"
+#include "bricklayer/board/board_geometry.h"
 #include "bricklayer/core/stack.h"
 
 namespace bricklayer::simcam {
