@@ -17,6 +17,7 @@
 #include "bricklayer/round_t.hpp"
 #include "bricklayer/stack_t.hpp"
 #include "bricklayer/study_answer_t.hpp"
+#include "bricklayer/study_command_t.hpp"
 #include "bricklayer/study_problem_t.hpp"
 #include "bricklayer/study_session_t.hpp"
 #include "bricklayer/study_trial_t.hpp"
@@ -37,7 +38,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1 || size > (1 << 20)) return 0;
   const uint8_t* body = data + 1;
   size_t n = size - 1;
-  switch (data[0] % 16) {
+  switch (data[0] % 17) {
     case 0: roundtrip<bricklayer::image_t>(body, n); break;
     case 1: roundtrip<bricklayer::stack_t>(body, n); break;
     case 2: roundtrip<bricklayer::prediction_t>(body, n); break;
@@ -54,6 +55,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     case 13: roundtrip<bricklayer::study_trial_t>(body, n); break;
     case 14: roundtrip<bricklayer::study_problem_t>(body, n); break;
     case 15: roundtrip<bricklayer::study_answer_t>(body, n); break;
+    case 16: roundtrip<bricklayer::study_command_t>(body, n); break;
   }
   return 0;
 }

@@ -136,3 +136,31 @@ TEST_CASE("bricklayer-study: bad arguments exit 2 with a message, --help exits 0
   CHECK(missing.status == 1);
   CHECK(missing.err.find("cannot be opened as an LCM log") != std::string::npos);
 }
+
+TEST_CASE("bricklayer-study script writes a scenario, and the session program checks its flags", "[cli]") {
+  const std::string out = base_path("scenario") + ".json";
+  const Run ok = study("script --trial1 50 --trial2 80 --answers correct,excess,failed --problems " +
+                       std::string(BRICKLAYER_SOURCE_DIR) + "/launch/problems " + out);
+  CHECK(ok.status == 0);
+  const auto j = nlohmann::json::parse(slurp(out));
+  CHECK(j["keyframes"].size() > 10);
+  CHECK(j["description"].get<std::string>().find("problems 1-3 correct, excess, failed") != std::string::npos);
+  std::remove(out.c_str());
+  CHECK(study("script --answers correct,correct,excess " + out).status == 2);  // problem 3 has no excess
+  CHECK(study("script --trial1 500 " + out).status == 2);
+  CHECK(study("script --answers correct " + out).status == 2);
+  CHECK(study("send sideways").status == 2);
+
+  const std::string session = std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-study-session";
+  const std::string problems = std::string(BRICKLAYER_SOURCE_DIR) + "/launch/problems/";
+  const std::string files = " --problem-1 " + problems + "stabilise-two.json --problem-2 " + problems +
+                            "stabilise-one.json --problem-3 " + problems + "score-100-four.json";
+  auto run = [](const std::string& command) {
+    const int raw = std::system((command + " > /dev/null 2>&1").c_str());
+    return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  };
+  CHECK(run(session + " --help") == 0);
+  CHECK(run(session + " --check-config --subject p01 --condition red" + files) == 0);
+  CHECK(run(session + " --check-config --subject p01 --condition green" + files) == 2);
+  CHECK(run(session + " --check-config --condition red" + files) == 2);  // no subject
+}

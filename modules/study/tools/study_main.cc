@@ -10,6 +10,10 @@
 //   bricklayer-study windows [--step S] PROBLEM
 //       For designing problems: where the last block of the file's solution may go (the other solution
 //       blocks in place), as x intervals per row on a grid of S block lengths (default 0.001).
+//   bricklayer-study send start|pause|resume|repeat|abort|done [--session ID] [--lcm-url URL]
+//       Publishes one study_command_t on BL_STUDY_COMMAND for the session driver.
+//   bricklayer-study script [--trial1 N] [--trial2 N] [--answers A,A,A] [--trial-seconds S] [--problems DIR] OUT
+//       Writes a scripted subject's whole session as a simcam scenario (for bricklayer-simcam).
 //   bricklayer-study check PROBLEM PILE
 //       Judges a final pile (bricklayer-predict's stack JSON, "-" for stdin) as an answer to a stabilise
 //       problem; prints one JSON line {"outcome", "stands", "blocks_added", "minimum_added", "score", "reason"}.
@@ -26,10 +30,17 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bricklayer/common/channels.h"
 #include "bricklayer/common/flags.h"
+#include "bricklayer/common/lcm_url.h"
+#include "bricklayer/runtime/codec.h"
+#include "bricklayer/runtime/lcm_bus.h"
+#include "bricklayer/study/channels.h"
+#include "bricklayer/study_command_t.hpp"
 #include "bricklayer/study/checker.h"
 #include "bricklayer/study/problem.h"
 #include "bricklayer/study/study_log.h"
+#include "bricklayer/study/subject_script.h"
 #include "bricklayer/study/table.h"
 
 namespace {
@@ -42,6 +53,8 @@ constexpr const char* kUsage =
     "       bricklayer-study minimum PROBLEM...\n"
     "       bricklayer-study windows [--step S] PROBLEM\n"
     "       bricklayer-study check PROBLEM PILE\n"
+    "       bricklayer-study send start|pause|resume|repeat|abort|done [--session ID] [--lcm-url URL]\n"
+    "       bricklayer-study script [--trial1 N] [--trial2 N] [--answers A,A,A] [--trial-seconds S] [--problems DIR] OUT\n"
     "\n"
     "report   Table 1 of the seed paper's study from recorded bus logs: per condition (blue, red, proposed)\n"
     "         the subjects, trial 1 average score, how many solved problems 1-3 and how many of them used\n"
@@ -53,6 +66,13 @@ constexpr const char* kUsage =
     "         with a witness and whether fewer were proven impossible; checks the file's declared values.\n"
     "windows  for problem designers: the x intervals (per row, grid --step, default 0.001) where the last\n"
     "         block of the file's solution makes the pile stand, the other solution blocks in place.\n"
+    "send     one command to the running session driver (bricklayer-study-session): pause, resume,\n"
+    "         repeat (the current step again; between steps the one just finished), abort, done (the\n"
+    "         subject's answer to a stabilise problem), start (a driver started with --wait-for-start).\n"
+    "script   a scripted subject as a simcam scenario: games to scores N (1..117), answers to problems\n"
+    "         1-3 (correct, excess or failed; problem 3 correct or failed), on the problems in DIR\n"
+    "         (default launch/problems: stabilise-two, stabilise-one, score-100-four);\n"
+    "         timed for a session driver with the same --trial-seconds (default 120).\n"
     "check    judge PILE (stack JSON as bricklayer-predict reads it; - = stdin) as the subject's final\n"
     "         pile for PROBLEM: correct, excess or failed, as one JSON line.\n";
 
@@ -202,6 +222,110 @@ int check(const std::vector<std::string>& args) {
   return 0;
 }
 
+int send(const std::vector<std::string>& args) {
+  std::string session, url_flag, name;
+  for (size_t i = 0; i < args.size(); ++i) {
+    if (args[i] == "--session" || args[i] == "--lcm-url") {
+      if (i + 1 >= args.size()) throw FlagError(args[i] + " needs a value");
+      (args[i] == "--session" ? session : url_flag) = args[i + 1];
+      ++i;
+    } else if (args[i].rfind("--", 0) == 0) {
+      throw FlagError("send: unknown flag '" + args[i] + "' (expected --session ID, --lcm-url URL)");
+    } else if (name.empty()) {
+      name = args[i];
+    } else {
+      throw FlagError("send: one command at a time");
+    }
+  }
+  const std::vector<std::pair<std::string, int8_t>> commands{
+      {"start", bricklayer::study_command_t::START},   {"pause", bricklayer::study_command_t::PAUSE},
+      {"resume", bricklayer::study_command_t::RESUME}, {"repeat", bricklayer::study_command_t::REPEAT},
+      {"abort", bricklayer::study_command_t::ABORT},   {"done", bricklayer::study_command_t::DONE}};
+  int8_t command = 0;
+  for (const auto& [n, c] : commands) {
+    if (n == name) command = c;
+  }
+  if (command == 0) throw FlagError("send: expected start, pause, resume, repeat, abort or done, got '" + name + "'");
+  const std::string url = bricklayer::resolve_lcm_url(url_flag);
+  bricklayer::check_lcm_url(url);
+  bricklayer::runtime::LcmBus bus(url);
+  bricklayer::study_command_t msg{};
+  msg.utime = bus.now_utime();
+  msg.session_id = session;
+  msg.command = command;
+  msg.sequence = msg.utime;  // unique per send: a driver ignores only a repeat of the same message
+  const std::vector<uint8_t> bytes = bricklayer::runtime::encode(msg);
+  if (!bus.publish(bricklayer::channel(study::kStudyCommandChannel), bytes.data(), bytes.size())) {
+    throw std::runtime_error("the bus refused the command: " + bus.problem());
+  }
+  return 0;
+}
+
+int script(const std::vector<std::string>& args) {
+  study::SubjectScript subject;
+  double trial_seconds = 120.0;
+  std::string out;
+  std::string problems = "launch/problems";
+  auto number = [](const std::string& flag, const std::string& value) {
+    try {
+      size_t used = 0;
+      const double v = std::stod(value, &used);
+      if (used != value.size()) throw std::invalid_argument(value);
+      return v;
+    } catch (const std::exception&) {
+      throw FlagError(flag + " must be a number, got '" + value + "'");
+    }
+  };
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--problems") {
+      if (i + 1 >= args.size()) throw FlagError("--problems needs a folder");
+      problems = args[++i];
+    } else if (a == "--trial1" || a == "--trial2" || a == "--answers" || a == "--trial-seconds") {
+      if (i + 1 >= args.size()) throw FlagError(a + " needs a value");
+      const std::string v = args[++i];
+      if (a == "--trial1") subject.trial1_score = static_cast<int32_t>(number(a, v));
+      if (a == "--trial2") subject.trial2_score = static_cast<int32_t>(number(a, v));
+      if (a == "--trial-seconds") trial_seconds = number(a, v);
+      if (a == "--answers") {
+        std::stringstream list(v);
+        std::string item;
+        size_t k = 0;
+        while (std::getline(list, item, ',')) {
+          if (k >= 3) throw FlagError("--answers takes three outcomes, e.g. correct,excess,failed");
+          if (item == "correct") subject.answers[k] = study::Outcome::kCorrect;
+          else if (item == "excess") subject.answers[k] = study::Outcome::kExcess;
+          else if (item == "failed") subject.answers[k] = study::Outcome::kFailed;
+          else throw FlagError("--answers: '" + item + "' is not correct, excess or failed");
+          ++k;
+        }
+        if (k != 3) throw FlagError("--answers takes three outcomes, e.g. correct,excess,failed");
+      }
+    } else if (a.rfind("--", 0) == 0) {
+      throw FlagError("script: unknown flag '" + a + "'");
+    } else if (out.empty()) {
+      out = a;
+    } else {
+      throw FlagError("script: one output file");
+    }
+  }
+  if (out.empty()) throw FlagError("script: no output file given");
+  if (!(trial_seconds >= 1 && trial_seconds <= 3600)) throw FlagError("--trial-seconds must be in 1..3600");
+  study::SessionSetup timing;
+  timing.trial_ms = static_cast<int64_t>(trial_seconds * 1000);
+  const std::string dir = problems + "/";
+  std::string json;
+  try {
+    json = study::subject_scenario_json(subject, timing, study::load_problem(dir + "stabilise-two.json"),
+                                        study::load_problem(dir + "stabilise-one.json"),
+                                        study::load_problem(dir + "score-100-four.json"));
+  } catch (const std::invalid_argument& e) {
+    throw FlagError(e.what());
+  }
+  write_to(out, json + "\n");
+  return 0;
+}
+
 int Main(int argc, char** argv) {
   if (argc < 2) throw FlagError("no command given\n" + std::string(kUsage));
   const std::string command = argv[1];
@@ -215,7 +339,9 @@ int Main(int argc, char** argv) {
   if (command == "minimum") return minimum(args);
   if (command == "check") return check(args);
   if (command == "windows") return windows(args);
-  throw FlagError("unknown command '" + command + "' (expected report, minimum or check)");
+  if (command == "send") return send(args);
+  if (command == "script") return script(args);
+  throw FlagError("unknown command '" + command + "' (expected report, minimum, windows, check, send or script)");
 }
 
 }  // namespace
