@@ -146,8 +146,10 @@ TEST_CASE("bricklayer-study script writes a scenario, and the session program ch
   CHECK(j["keyframes"].size() > 10);
   CHECK(j["description"].get<std::string>().find("problems 1-3 correct, excess, failed") != std::string::npos);
   std::remove(out.c_str());
-  CHECK(study("script --answers correct,correct,excess " + out).status == 2);  // problem 3 has no excess
-  CHECK(study("script --trial1 500 " + out).status == 2);
+  const std::string dir = " --problems " + std::string(BRICKLAYER_SOURCE_DIR) + "/launch/problems ";
+  CHECK(study("script --answers correct,correct,excess" + dir + out).status == 2);  // problem 3 has no excess
+  CHECK(study("script --trial1 500" + dir + out).status == 2);
+  CHECK(study("script --problems /nonexistent " + out).status == 1);  // unreadable problem files: bad input
   CHECK(study("script --answers correct " + out).status == 2);
   CHECK(study("send sideways").status == 2);
 

@@ -41,11 +41,7 @@ SessionNode::SessionNode(const SessionConfig& config, runtime::Bus& bus)
       command_channel_(channel(kCommandChannel)) {
   SessionSetup setup;
   setup.subject_id = config.subject;
-  try {
-    setup.condition = parse_condition(config.condition);
-  } catch (const std::invalid_argument&) {
-    throw;
-  }
+  setup.condition = parse_condition(config.condition);  // std::invalid_argument: a bad configuration
   setup.session_id = config.session_id.empty() ? config.subject + "-" + std::to_string(now() / 1'000'000) : config.session_id;
   setup.trial_ms = static_cast<int64_t>(config.trial_seconds * 1000.0);
   setup.clear_ms = static_cast<int64_t>(config.clear_seconds * 1000.0);

@@ -311,6 +311,11 @@ int script(const std::vector<std::string>& args) {
   }
   if (out.empty()) throw FlagError("script: no output file given");
   if (!(trial_seconds >= 1 && trial_seconds <= 3600)) throw FlagError("--trial-seconds must be in 1..3600");
+  // The script's own values first: a typo is a bad argument whatever the problem files say.
+  for (int32_t score : {subject.trial1_score, subject.trial2_score}) {
+    if (score < 1 || score > 117) throw FlagError("--trial1/--trial2 must be in 1..117 (a standing pile of four), got " + std::to_string(score));
+  }
+  if (subject.answers[2] == study::Outcome::kExcess) throw FlagError("--answers: problem 3 (score) is correct or failed, never excess");
   study::SessionSetup timing;
   timing.trial_ms = static_cast<int64_t>(trial_seconds * 1000);
   const std::string dir = problems + "/";
