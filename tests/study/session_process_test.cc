@@ -1,6 +1,7 @@
 // bricklayer-study-session and bricklayer-study send as real processes on a real LCM bus (inside a
-// private network namespace): the experimenter pauses, resumes and aborts a running session from
-// another process, and the driver exits by itself once the session is over.
+// private network namespace): the experimenter sends commands to a running session from
+// another process (a pause before the first step runs does not apply; the abort does), and the driver exits
+// by itself once the session is over.
 #include <chrono>
 #include <string>
 
@@ -17,7 +18,7 @@ using namespace bricklayer;
 using S = bricklayer::study_session_t;
 using namespace std::chrono_literals;
 
-TEST_CASE("study session process: paused, resumed and aborted by bricklayer-study send", "[process]") {
+TEST_CASE("study session process: a pause that does not apply yet and an abort, sent by bricklayer-study send", "[process]") {
   const std::string url = "udpm://239.255.76.67:7667?ttl=0";
   runtime::LcmBus bus(url);
   auto rec = harness::Recorder::live(bus, {channel(study::kSessionChannel), channel(kHeartbeatChannel)});
