@@ -96,7 +96,8 @@ Problem parse_problem(std::string_view text_in, const std::string& fallback_name
   bool has_minimum = false;
   bool has_score = false;
   bool has_blocks = false;
-  for (const auto& [key, value] : json.items()) {
+  for (const auto& [key_ref, value] : json.items()) {
+    const std::string key = key_ref;  // a structured binding cannot be captured by a lambda (C++17; clang 14)
     auto only = [&](bool allowed) {
       if (!allowed) throw ProblemError("\"" + key + "\" does not belong in a \"" + kind_name + "\" problem");
     };
