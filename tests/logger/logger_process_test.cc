@@ -262,7 +262,7 @@ TEST_CASE("increment (--rotate 0 --split-mb M): FILE.00, FILE.01, ... together h
 TEST_CASE("SIGTERM writes and flushes what was received, SIGHUP starts a new file") {
   TempDir dir("signals");
   // No periodic flush: whatever reaches the disk does so because of the stop.
-  LoggerUnderTest logger(dir, {"--flush-ms", "600000", (dir.path / "log").string()});
+  LoggerUnderTest logger(dir, {"--flush-ms", "600000", "--channels", "TEST_SIGNALS", (dir.path / "log").string()});
   auto pub = std::make_unique<lcm::LCM>(test::kTestUrl);
   auto send = [&](uint32_t from, uint32_t to) {
     for (uint32_t i = from; i < to; ++i) {
@@ -271,13 +271,18 @@ TEST_CASE("SIGTERM writes and flushes what was received, SIGHUP starts a new fil
     }
   };
   send(0, 10);
-  REQUIRE(logger.wait_heartbeat([](const heartbeat_t& hb) { return hb.published >= 10; }, 10s));
+  // Queued, not on the disk, and not counted as written: "published" is what reached the file.
+  REQUIRE(logger.wait_heartbeat([](const heartbeat_t& hb) { return value_of(hb, "queue_bytes") >= 10 * 100; }, 10s));
+  CHECK(logger.last().published == 0);
+  CHECK(fs::file_size(dir.path / "log.00") == 0);
   ::kill(logger.proc().pid(), SIGHUP);
-  REQUIRE(logger.wait_heartbeat([](const heartbeat_t& hb) { return value_of(hb, "files") == 2; }, 10s));
+  REQUIRE(logger.wait_heartbeat([](const heartbeat_t& hb) { return value_of(hb, "files") == 2 && hb.published == 10; }, 10s));
+  CHECK(fs::file_size(dir.path / "log.00") == 10 * 100);
   send(10, 30);
-  REQUIRE(logger.wait_heartbeat([](const heartbeat_t& hb) { return hb.published >= 30; }, 10s));
-  // Written into the file's buffer, not yet on the disk (no flush for 10 minutes).
-  CHECK(fs::file_size(dir.path / "log.01") < 20 * 60);
+  REQUIRE(logger.wait_heartbeat([](const heartbeat_t& hb) { return value_of(hb, "queue_bytes") >= 20 * 100; }, 10s));
+  // Not yet on the disk (no write for 10 minutes), and not counted.
+  CHECK(fs::file_size(dir.path / "log.01") == 0);
+  CHECK(logger.last().published == 10);
   const launcher::ExitStatus st = logger.stop();
   INFO(logger.stderr_text());
   CHECK(st.clean());

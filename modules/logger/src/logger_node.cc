@@ -4,7 +4,9 @@
 #include <signal.h>
 
 #include <cmath>
+#include <cstdio>
 #include <ctime>
+#include <optional>
 
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/log.h"
@@ -38,7 +40,36 @@ WriterOptions writer_options(const LoggerConfig& c) {
   w.split_bytes = static_cast<int64_t>(std::llround(c.split_mb * 1024 * 1024));
   w.flush_ms = c.flush_ms;
   w.max_unwritten_bytes = static_cast<int64_t>(std::llround(c.max_unwritten_mb * 1024 * 1024));
+  w.budget_bytes = static_cast<int64_t>(std::llround(c.budget_mb * 1024 * 1024));
+  w.min_free_bytes = static_cast<int64_t>(std::llround(c.min_free_mb * 1024 * 1024));
+  w.series_prefix = c.series;
+  w.index = !c.no_index;
   return w;
+}
+
+FramePolicyOptions frame_policy(const LoggerConfig& c) {
+  FramePolicyOptions f;
+  f.frame_channel = channel(kImageChannel);
+  f.rate = c.frame_rate;
+  f.before_s = c.full_rate_before_s;
+  f.after_s = c.full_rate_after_s;
+  // The delay line shares the unwritten bound: together they never hold more than twice it.
+  f.max_held_bytes = static_cast<int64_t>(std::llround(c.max_unwritten_mb * 1024 * 1024));
+  return f;
+}
+
+MomentChannels moment_channels() {
+  MomentChannels m;
+  m.prediction = channel(kPredictionChannel);
+  m.round = channel(kRoundChannel);
+  m.command = channel(kCommandChannel);
+  return m;
+}
+
+std::string mb(int64_t bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f MB", static_cast<double>(bytes) / (1024.0 * 1024.0));
+  return text;
 }
 
 }  // namespace
@@ -50,6 +81,15 @@ std::string LoggerConfig::regex_rule(const std::string& pattern) {
   } catch (const std::regex_error& e) {
     return "'" + pattern + "' is not a valid regular expression: " + e.what();
   }
+}
+
+void LoggerNode::check(const Config& c) {
+  if (c.budget_mb > 0 && c.split_mb > 0 && 2 * c.split_mb > c.budget_mb)
+    throw std::invalid_argument("--split-mb must be at most half of --budget-mb (the open file is never deleted), got " +
+                                runtime::config_detail::to_text(c.split_mb) + " and " +
+                                runtime::config_detail::to_text(c.budget_mb));
+  if (c.budget_mb > 0 && c.split_mb == 0)
+    throw std::invalid_argument("--budget-mb needs --split-mb (the budget deletes whole files, never the open one)");
 }
 
 runtime::LcmBusOptions LoggerNode::bus_options(const Config& config) {
@@ -66,8 +106,12 @@ LoggerNode::LoggerNode(const Config& config, runtime::Bus& bus)
       has_exclude_(!config.exclude.empty()),
       exclude_(config.exclude.empty() ? "^$" : config.exclude),
       image_channel_(channel(kImageChannel)),
-      port_(udpm_port(bus.describe())) {
+      port_(udpm_port(bus.describe())),
+      moments_(moment_channels()),
+      policy_(frame_policy(config)),
+      budget_bytes_(static_cast<int64_t>(std::llround(config.budget_mb * 1024 * 1024))) {
   runtime::validate(config);
+  check(config);
   writer_ = std::make_unique<EventWriter>(writer_options(config), [this](const Event& e) { on_written(e); });
   // One subscription sees everything; --channels / --exclude narrow it in wanted() (the same full
   // match), so what is skipped is counted. The queue only holds one burst: the handler copies.
@@ -106,7 +150,16 @@ void LoggerNode::on_message(const runtime::Received& r) {
   e.utime = r.utime;
   e.channel = r.channel;
   e.data.assign(r.data, r.data + r.size);
-  writer_->push(std::move(e));
+  if (std::optional<Moment> m = moments_.observe(r.channel, r.data, r.size, r.utime)) {
+    ++moments_seen_;
+    if (MomentDetector::wants_full_rate(*m)) policy_.moment(m->utime);
+    log::info("moment: ", m->kind, m->note.empty() ? "" : " (" + m->note + ")");
+    writer_->note(std::move(*m));
+  }
+  if (policy_.thins())
+    policy_.offer(std::move(e));
+  else
+    writer_->push(std::move(e));
 }
 
 void LoggerNode::on_written(const Event& e) {
@@ -142,17 +195,29 @@ void LoggerNode::update_figures() {
   set_value("queue_peak_bytes", static_cast<double>(w.peak_queued_bytes));
   set_value("files", static_cast<double>(w.files));
   set_value("rcvbuf_bytes", static_cast<double>(rcvbuf_bytes_));
+  set_value("lost", static_cast<double>(w.lost));
+  set_value("deleted_files", static_cast<double>(w.deleted_files));
+  set_value("deleted_bytes", static_cast<double>(w.deleted_bytes));
+  set_value("series_bytes", static_cast<double>(w.series_bytes));
+  set_value("free_bytes", static_cast<double>(w.free_bytes));
+  set_value("budget_bytes", static_cast<double>(budget_bytes_));
+  set_value("frames_kept", static_cast<double>(policy_.frames_kept()));
+  set_value("frames_thinned", static_cast<double>(policy_.frames_thinned()));
+  set_value("held_bytes", static_cast<double>(policy_.held_bytes()));
+  set_value("moments", static_cast<double>(moments_seen_));
   const int64_t lost = w.dropped + kernel_drops_ + gaps_.load();
-  if (lost > 0 || w.write_errors > 0) {
+  if (lost > 0 || w.write_errors > 0 || w.lost > 0) {
     set_status("LOSING: " + std::to_string(w.dropped) + " queue-full drops, " + std::to_string(kernel_drops_) +
                " kernel drops, " + std::to_string(gaps_.load()) + " sequence gaps, " + std::to_string(w.write_errors) +
-               " write errors");
+               " write errors, " + std::to_string(w.lost) + " events not kept (disk full or over budget)" +
+               (w.current_file.empty() ? "; no file open" : ""));
   } else {
     set_status("ok");
   }
 }
 
 void LoggerNode::tick() {
+  for (Event& e : policy_.release(now())) writer_->push(std::move(e));
   update_figures();
   if (take_sighup()) writer_->request_new_file();
 }
@@ -165,12 +230,16 @@ void LoggerNode::before_stop() {
     before = counters().received;
     if (!step(50)) break;
   }
+  for (Event& e : policy_.release_all()) writer_->push(std::move(e));
   writer_->stop();
   update_figures();
   const WriterStats w = writer_->stats();
   log::info("stopped: ", counters().received, " received, ", w.written, " written (", w.bytes, " bytes, ", w.files,
             " file(s), last ", w.current_file, "), ", w.dropped, " dropped (queue full), ", kernel_drops_,
-            " kernel drops, ", gaps_.load(), " sequence gaps, ", w.write_errors, " write errors, ", excluded_, " excluded");
+            " kernel drops, ", gaps_.load(), " sequence gaps, ", w.write_errors, " write errors, ", w.lost,
+            " not kept (disk full or over budget), ", excluded_, " excluded; ", w.deleted_files, " old file(s) deleted (",
+            mb(w.deleted_bytes), "), the series holds ", mb(w.series_bytes), ", ", mb(w.free_bytes), " free; frames ",
+            policy_.frames_kept(), " kept, ", policy_.frames_thinned(), " thinned; ", moments_seen_, " moments");
 }
 
 }  // namespace bricklayer::logger

@@ -14,9 +14,14 @@
 //   dropped = events its full queue refused, errors = events the file refused; values: kernel_drops,
 //   sequence_gaps, source_restarts, excluded, bytes_written, queue_bytes, queue_peak_bytes, files,
 //   rcvbuf_bytes. Status "ok" only while nothing is known lost.
-// Files: FILE.0 with --rotate N (older parts FILE.1 ... FILE.<N-1>), else FILE.00, FILE.01, ...;
-//   --split-mb starts a new file, and so does SIGHUP. SIGINT/SIGTERM: what was received is written,
-//   flushed and synced, then exit 0.
+// Files: FILE.0 with --rotate N (older parts FILE.1 ... FILE.<N-1>), else FILE.00, FILE.01, ... and the
+//   recording's index FILE.index (recording_index.h); --split-mb starts a new file, and so does SIGHUP.
+//   --budget-mb / --min-free-mb keep the series (--series PREFIX) within its disk budget by deleting the
+//   oldest recordings first (disk_budget.h). --frame-rate thins camera frames outside the full-rate
+//   windows around moments (recording_policy.h, moment_detector.h). SIGINT/SIGTERM: what was received is
+//   written and synced, then exit 0.
+// Values also: lost (received, not kept: no room), deleted_files, deleted_bytes, series_bytes,
+//   free_bytes, budget_bytes, frames_kept, frames_thinned, held_bytes, moments.
 #pragma once
 
 #include <atomic>
@@ -27,6 +32,8 @@
 #include <unordered_map>
 
 #include "bricklayer/logger/event_writer.h"
+#include "bricklayer/logger/moment_detector.h"
+#include "bricklayer/logger/recording_policy.h"
 #include "bricklayer/logger/sequence_gaps.h"
 #include "bricklayer/runtime/config.h"
 #include "bricklayer/runtime/lcm_bus.h"
@@ -45,6 +52,13 @@ struct LoggerConfig {
   double max_unwritten_mb = 256;
   int queue_capacity = 1000000;
   double recv_buf_mb = 16;
+  double budget_mb = 0;
+  double min_free_mb = 0;
+  std::string series;
+  double frame_rate = 0;
+  double full_rate_before_s = 10;
+  double full_rate_after_s = 10;
+  bool no_index = false;
 
   template <typename Visitor>
   void visit(Visitor& v) {
@@ -65,6 +79,17 @@ struct LoggerConfig {
           .range(1, 100000000));
     v(runtime::param("recv-buf-mb", recv_buf_mb, "kernel receive buffer to ask for (capped at net.core.rmem_max unless root)")
           .range(0, 1024));
+    v(runtime::param("budget-mb", budget_mb, "the series may use at most this many MB of disk; the oldest recordings are deleted first (0 = no limit)")
+          .at_least(0));
+    v(runtime::param("min-free-mb", min_free_mb, "leave at least this many MB free on the disk, deleting the oldest recordings first (0 = none)")
+          .at_least(0));
+    v(runtime::param("series", series, "the budget covers every recording in FILE's folder whose name starts with this (default: this recording only)")
+          .must([](const std::string& s) { return s.find('/') != std::string::npos ? std::string("is a file name prefix, not a path") : std::string(); }));
+    v(runtime::param("frame-rate", frame_rate, "camera frames kept per second outside full-rate windows (0 = every frame)").range(0, 1000));
+    v(runtime::param("full-rate-before-s", full_rate_before_s, "with --frame-rate: every frame this long before a moment (red, collapse, round end, mark)")
+          .range(0, 600));
+    v(runtime::param("full-rate-after-s", full_rate_after_s, "with --frame-rate: every frame this long after a moment").range(0, 600));
+    v(runtime::param("no-index", no_index, "write no FILE.index (it is never written with --rotate > 0: rotation renames the parts)"));
   }
   // "" for a valid regular expression, else why not.
   static std::string regex_rule(const std::string& pattern);
@@ -90,6 +115,10 @@ class LoggerNode final : public runtime::Node {
   // The next event goes into a new file (what SIGHUP does).
   void request_new_file() { writer_->request_new_file(); }
   WriterStats writer_stats() const { return writer_->stats(); }
+  const RecordingPolicy& policy() const { return policy_; }
+
+  // Rules across fields (node_main calls it; the constructor too).
+  static void check(const Config& config);
 
  protected:
   void tick() override;
@@ -112,6 +141,10 @@ class LoggerNode final : public runtime::Node {
   int64_t kernel_drops_ = 0;
   int64_t rcvbuf_bytes_ = 0;
   int64_t next_socket_check_utime_ = 0;
+  MomentDetector moments_;
+  RecordingPolicy policy_;
+  int64_t moments_seen_ = 0;
+  int64_t budget_bytes_ = 0;
   SequenceGaps sequence_;  // writer thread only
   std::atomic<int64_t> gaps_{0}, source_restarts_{0};
   std::unique_ptr<EventWriter> writer_;  // last: its thread uses the members above, and stops first

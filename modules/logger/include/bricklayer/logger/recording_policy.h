@@ -1,0 +1,63 @@
+// What of the bus a day's recording keeps: every channel but camera frames, whole; camera frames at a
+// reduced rate, plus every frame in a window around the moments that matter (a red block appears, a
+// collapse, a round ends, an operator's mark), so the disk holds a whole day and every incident can be
+// watched at full rate.
+//
+// A window reaches back before its moment (what led to a collapse matters most), so frames must be
+// held until it is known whether a moment follows: every event waits before_s seconds in a delay line
+// (all channels, so the file stays in time order) and each frame is decided when it leaves. The price:
+// a logger killed with -9 loses the last before_s seconds instead of the last flush period; a clean
+// stop writes everything. rate 0 keeps every frame and holds nothing.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <string>
+#include <vector>
+
+#include "bricklayer/logger/event_writer.h"
+
+namespace bricklayer::logger {
+
+struct FramePolicyOptions {
+  std::string frame_channel = "BL_IMAGE";
+  double rate = 0;          // frames kept per second outside windows; 0 = keep every frame (no delay)
+  double before_s = 10;     // full rate this long before a moment ...
+  double after_s = 10;      // ... and this long after
+  int64_t max_held_bytes = 256ll << 20;  // beyond this the oldest held events leave early (decided as they are)
+};
+
+class RecordingPolicy {
+ public:
+  // Throws std::invalid_argument for negative or non-finite figures.
+  explicit RecordingPolicy(FramePolicyOptions options);
+
+  bool thins() const { return options_.rate > 0; }
+  // Takes an event (its utime is its arrival time).
+  void offer(Event e);
+  // Full rate around utime from now on.
+  void moment(int64_t utime);
+  // The events whose wait is over at now, in arrival order, frames decided; the others.
+  std::vector<Event> release(int64_t now_utime);
+  // Everything held (at stop): frames decided with the moments known.
+  std::vector<Event> release_all();
+
+  int64_t frames_kept() const { return frames_kept_; }
+  int64_t frames_thinned() const { return frames_thinned_; }
+  int64_t held_bytes() const { return held_bytes_; }
+  const FramePolicyOptions& options() const { return options_; }
+
+ private:
+  void leave(std::vector<Event>& out);
+  bool keep_frame(int64_t utime);
+
+  FramePolicyOptions options_;
+  int64_t before_us_, after_us_, period_us_;
+  std::deque<Event> held_;
+  std::deque<int64_t> moments_;  // ascending
+  int64_t held_bytes_ = 0;
+  int64_t last_kept_ = INT64_MIN;
+  int64_t frames_kept_ = 0, frames_thinned_ = 0;
+};
+
+}  // namespace bricklayer::logger

@@ -1,0 +1,66 @@
+#include "bricklayer/logger/recording_policy.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace bricklayer::logger {
+
+RecordingPolicy::RecordingPolicy(FramePolicyOptions options) : options_(std::move(options)) {
+  for (double v : {options_.rate, options_.before_s, options_.after_s})
+    if (!std::isfinite(v) || v < 0) throw std::invalid_argument("frame rate and window lengths must be finite and >= 0");
+  before_us_ = static_cast<int64_t>(std::llround(options_.before_s * 1e6));
+  after_us_ = static_cast<int64_t>(std::llround(options_.after_s * 1e6));
+  period_us_ = options_.rate > 0 ? static_cast<int64_t>(std::llround(1e6 / options_.rate)) : 0;
+}
+
+void RecordingPolicy::offer(Event e) {
+  held_bytes_ += EventWriter::file_size_of(e);
+  held_.push_back(std::move(e));
+}
+
+void RecordingPolicy::moment(int64_t utime) {
+  if (!moments_.empty() && utime < moments_.back()) utime = moments_.back();  // arrival order
+  moments_.push_back(utime);
+}
+
+bool RecordingPolicy::keep_frame(int64_t t) {
+  // Inside a window: some moment m with m - before <= t <= m + after.
+  while (!moments_.empty() && moments_.front() + after_us_ < t) moments_.pop_front();
+  const bool in_window = !moments_.empty() && moments_.front() - before_us_ <= t;
+  const bool due = last_kept_ == INT64_MIN || t - last_kept_ >= period_us_;
+  if (in_window || due) {
+    // The reduced rate is kept on its own grid, so a window does not shift it.
+    if (due) last_kept_ = last_kept_ == INT64_MIN || t - last_kept_ >= 2 * period_us_ ? t : last_kept_ + period_us_;
+    return true;
+  }
+  return false;
+}
+
+void RecordingPolicy::leave(std::vector<Event>& out) {
+  Event& e = held_.front();
+  held_bytes_ -= EventWriter::file_size_of(e);
+  if (!thins() || e.channel != options_.frame_channel) {
+    out.push_back(std::move(e));
+  } else if (keep_frame(e.utime)) {
+    ++frames_kept_;
+    out.push_back(std::move(e));
+  } else {
+    ++frames_thinned_;
+  }
+  held_.pop_front();
+}
+
+std::vector<Event> RecordingPolicy::release(int64_t now) {
+  std::vector<Event> out;
+  const int64_t wait = thins() ? before_us_ : 0;
+  while (!held_.empty() && (held_.front().utime + wait <= now || held_bytes_ > options_.max_held_bytes)) leave(out);
+  return out;
+}
+
+std::vector<Event> RecordingPolicy::release_all() {
+  std::vector<Event> out;
+  while (!held_.empty()) leave(out);
+  return out;
+}
+
+}  // namespace bricklayer::logger
