@@ -85,7 +85,7 @@ TEST_CASE("rotate N: always FILE.0, older parts shift to FILE.1 .. FILE.<N-1>, t
   CHECK_FALSE(fs::exists(base + ".3"));
 }
 
-TEST_CASE("rotate 0: FILE.00, FILE.01, ... the first free name, nothing is renamed or deleted") {
+TEST_CASE("rotate 0: FILE.00, FILE.01, ... after the highest number, never reused, nothing is renamed or deleted") {
   TempDir dir("increment");
   const std::string base = (dir.path / "log").string();
   touch(base + ".00", "someone else's");
@@ -95,6 +95,10 @@ TEST_CASE("rotate 0: FILE.00, FILE.01, ... the first free name, nothing is renam
   touch(first, "x");
   CHECK(series.next() == base + ".02");
   CHECK(slurp(base + ".00") == "someone else's");
+  fs::remove(first);  // deleted by the disk budget: its number is not used again
+  CHECK(series.next() == base + ".03");
+  touch(base + ".07", "a restarted logger's");
+  CHECK(LogSeries(base, 0).next() == base + ".08");
 }
 
 TEST_CASE("bad series arguments and strftime patterns are clear errors") {

@@ -10,6 +10,8 @@
 #include "bricklayer/common/channels.h"
 #include "bricklayer/image_t.hpp"
 #include "bricklayer/logger/logger_node.h"
+#include "bricklayer/logger/recording_index.h"
+#include "bricklayer/prediction_t.hpp"
 #include "bricklayer/runtime/log_file.h"
 #include "harness/rig.h"
 #include "harness/scratch.h"
@@ -108,4 +110,64 @@ TEST_CASE("a log the logger cannot create is an error at start") {
   CHECK_THROWS_AS(rig.add<logger::LoggerNode>(config), std::runtime_error);
   config.file = "";
   CHECK_THROWS_AS(rig.add<logger::LoggerNode>(config), std::invalid_argument);
+}
+
+TEST_CASE("a day's policy: frames thinned, full rate around a red block, the moment and seek points in the index") {
+  harness::ScratchDir dir("logger-node-policy");
+  harness::Rig rig(1000);
+  logger::LoggerConfig config;
+  config.file = (dir / "day").string();
+  config.frame_rate = 1;
+  config.full_rate_before_s = 2;
+  config.full_rate_after_s = 3;
+  config.flush_ms = 0;
+  auto& node = rig.add<logger::LoggerNode>(config);
+  const int64_t start = rig.now();
+  int64_t red_at = 0;
+  std::vector<int64_t> sent;
+  for (int f = 0; f < 30 * 20; ++f) {  // 20 s of frames at about 30 a second, a prediction each
+    sent.push_back(rig.now());
+    rig.publish(channel(kImageChannel), frame("cam", f));
+    prediction_t p{};
+    p.frame_number = f;
+    p.status = prediction_t::STATUS_OK;
+    p.num_blocks = 2;
+    p.blocks.resize(2);
+    if (f >= 300 && f < 330) p.blocks[1].state = block_prediction_t::STATE_CAUSE;  // red from 10 s to 11 s
+    if (f == 300) red_at = rig.now();
+    rig.publish(channel(kPredictionChannel), p);
+    rig.run_for(std::chrono::microseconds(33'333));
+  }
+  rig.run_for(3s);  // past the delay line
+  const int64_t frames_in = 600, predictions = 600;
+  CHECK(node.policy().frames_kept() + node.policy().frames_thinned() == frames_in);
+  REQUIRE(written(rig, node, predictions + node.policy().frames_kept()));
+  std::vector<int64_t> frame_times;
+  int64_t prediction_events = 0;
+  for (const auto& e : read_log((dir / "day.00").string())) {
+    if (e.channel == channel(kImageChannel)) frame_times.push_back(e.utime);
+    if (e.channel == channel(kPredictionChannel)) ++prediction_events;
+  }
+  CHECK(prediction_events == predictions);  // every other channel whole
+  int in_window = 0, outside = 0;
+  for (int64_t t : frame_times) (t >= red_at - 2'000'000 && t <= red_at + 3'000'000 ? in_window : outside)++;
+  int sent_in_window = 0;
+  for (int64_t t : sent) sent_in_window += t >= red_at - 2'000'000 && t <= red_at + 3'000'000;
+  CHECK(sent_in_window >= 140);
+  CHECK(in_window == sent_in_window);  // every frame of the 5 s around the red block
+  CHECK(outside >= 14);     // about one a second for the other 15 s
+  CHECK(outside <= 17);
+  const auto index = logger::RecordingIndex::load((dir / "day.index").string());
+  REQUIRE(index.moments().size() == 1);
+  CHECK(index.moments()[0].kind == "red");
+  CHECK(index.moments()[0].utime == red_at);
+  CHECK(index.seek_points().size() >= 19);  // about one a second
+  const auto seek = index.seek(start + 12'000'000);
+  REQUIRE(seek);
+  runtime::LogReader reader(seek->part);
+  reader.seek(seek->offset);
+  runtime::LogEvent e;
+  REQUIRE(reader.next(e));
+  CHECK(e.utime <= start + 12'000'000);
+  CHECK(e.utime > start + 10'900'000);
 }

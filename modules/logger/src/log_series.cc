@@ -1,5 +1,6 @@
 #include "bricklayer/logger/log_series.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -33,13 +34,29 @@ std::string LogSeries::next() {
     }
     return numbered(0);
   }
-  for (int k = 0; k < 1000000; ++k) {
+  if (next_ < 0) {
+    // After the highest number already there (a restarted logger continues its recording), so the
+    // numbers follow the time order even once the budget has deleted the oldest parts.
+    next_ = 0;
+    const std::string prefix = base.filename().string() + ".";
+    for (const auto& entry : fs::directory_iterator(base.has_parent_path() ? base.parent_path() : fs::path("."), ec)) {
+      const std::string name = entry.path().filename().string();
+      if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+      const std::string suffix = name.substr(prefix.size());
+      if (suffix.size() > 7 || suffix.find_first_not_of("0123456789") != std::string::npos) continue;
+      next_ = std::max(next_, std::stoi(suffix) + 1);
+    }
+  }
+  for (int k = next_; k < 10000000; ++k) {
     char suffix[16];
     std::snprintf(suffix, sizeof suffix, ".%02d", k);
     std::string path = base_ + suffix;
-    if (!fs::exists(path, ec) && !ec) return path;
+    if (!fs::exists(path, ec) && !ec) {
+      next_ = k + 1;  // never a name used before, even when that file is gone
+      return path;
+    }
   }
-  throw std::runtime_error("no free file name " + base_ + ".NN (a million logs already?)");
+  throw std::runtime_error("no free file name " + base_ + ".NN (ten million logs already?)");
 }
 
 std::string expand_strftime(const std::string& pattern, long long t) {

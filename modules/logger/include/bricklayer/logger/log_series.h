@@ -3,8 +3,9 @@
 // keep working.
 //   rotate N > 0: always write BASE.0; before a new file, BASE.k is renamed to BASE.k+1 and BASE.<N-1>
 //                 deleted, so at most N files (the newest is BASE.0).
-//   rotate 0:     increment: BASE.00, BASE.01, ... the first name that does not exist; nothing is
-//                 ever renamed or deleted.
+//   rotate 0:     increment: BASE.00, BASE.01, ... numbered after the highest one already there and
+//                 never reusing a number (so the numbers keep the time order when the disk budget
+//                 deletes the oldest parts); nothing is ever renamed here.
 #pragma once
 
 #include <string>
@@ -27,6 +28,7 @@ class LogSeries {
  private:
   std::string base_;
   int rotate_;
+  int next_ = -1;  // increment: the next number to try (-1: not scanned yet)
 };
 
 // The base name with strftime conversions expanded for the local time t (seconds since the epoch).
