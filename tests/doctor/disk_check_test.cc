@@ -57,6 +57,23 @@ TEST_CASE("a 4 MB disk: a 2 MB log series fits, a 10 MB one warns, a larger mini
   fs::remove_all(dir.parent_path());
 }
 
+TEST_CASE("the logger's disk budget and minimum free space are what the doctor checks") {
+  const fs::path dir = test::temp_dir("disk-budget") / "mnt";
+  fs::create_directories(dir);
+  auto r = doctor_on_tmpfs(dir, R"({"file":"logs/t-%Y","split_mb":1,"budget_mb":3,"min_free_mb":0.5})", "0");
+  INFO(r.out);
+  std::string line = check_line(r.out, "disk");
+  CHECK(severity(line) == "ok");
+  CHECK(line.find("the series fits (3.0 MB, budget_mb 3 of the series t-*)") != std::string::npos);
+  // The logger keeps 2 MB free: with its 3 MB budget that is more than the 4 MB disk holds.
+  r = doctor_on_tmpfs(dir, R"({"file":"logs/t-%Y","split_mb":1,"budget_mb":3,"min_free_mb":2})", "0");
+  INFO(r.out);
+  line = check_line(r.out, "disk");
+  CHECK(severity(line) == "warning");
+  CHECK(line.find("more than fits above the 2.0 MB to keep free") != std::string::npos);
+  fs::remove_all(dir.parent_path());
+}
+
 TEST_CASE("logs already on the disk count as reusable by the rotation, rotate 0 never deletes and warns") {
   const fs::path dir = test::temp_dir("disk-used") / "mnt";
   fs::create_directories(dir);
@@ -84,6 +101,13 @@ TEST_CASE("the budget from the profile, and a folder that does not exist yet") {
   CHECK(b.folder == "/exhibit/logs");
   CHECK(b.max_bytes == 20ull * 200 * 1048576);
   CHECK(b.min_free_bytes == 5);
+  // The logger's budget and minimum free space, as the logger enforces them.
+  plan.logger->budget_mb = 5000;
+  plan.logger->min_free_mb = 1000;
+  b = doctor::budget_from_plan(plan, 5);
+  CHECK(b.max_bytes == 5000ull * 1048576);
+  CHECK(b.min_free_bytes == 1000ull * 1048576);
+  CHECK(b.source == "budget_mb 5000 of the series x-*");
   // Not created yet: measured at the nearest existing parent.
   b.folder = (fs::temp_directory_path() / "bricklayer-doctor-none" / "logs").string();
   b.max_bytes = 1;

@@ -62,10 +62,10 @@ TEST_CASE("the demo profile runs headless, stops by itself, and its log replays 
   CHECK(m[5] == "0");
   CHECK(fs::exists(dir / "snapshots" / "latest.png"));
 
-  REQUIRE(fs::exists(dir / "demo.0"));
+  REQUIRE(fs::exists(dir / "demo.00"));
   launcher::SpawnOptions ro;
   ro.stdout_path = (dir / "replay.out").string();
-  auto replay = launcher::Process::spawn({test::bin("bricklayer-replay"), (dir / "demo.0").string(), "--check"}, ro);
+  auto replay = launcher::Process::spawn({test::bin("bricklayer-replay"), (dir / "demo.00").string(), "--check"}, ro);
   auto rst = replay.wait_for(60s);
   REQUIRE(rst);
   std::string rout = slurp(dir / "replay.out");

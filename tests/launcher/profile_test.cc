@@ -145,3 +145,50 @@ TEST_CASE("bricklayer-launch --check prints the plan, or names every missing bin
   CHECK(bad_out.find("module 'w' needs 'tools/missing.sh'") != std::string::npos);
   fs::remove_all(dir);
 }
+
+TEST_CASE("the logger spec: a disk budget, a frame policy, and the command line they become") {
+  const Profile p = parse_profile(R"({"modules":[],"logger":{"file":"logs/exhibit-%Y%m%d","split_mb":100,
+      "budget_mb":5000,"min_free_mb":1000,"frames":{"rate":2,"before_s":8}}})", "t");
+  REQUIRE(p.logger);
+  CHECK(p.logger->rotate == 0);  // a budget bounds the series: increment naming
+  CHECK(p.logger->budget_mb == 5000);
+  CHECK(p.logger->min_free_mb == 1000);
+  REQUIRE(p.logger->frames);
+  CHECK(p.logger->frames->rate == 2);
+  CHECK(p.logger->frames->before_s == 8);
+  CHECK(p.logger->frames->after_s == 10);  // the default
+  CHECK(series_prefix("logs/exhibit-%Y%m%d") == "exhibit-");
+  CHECK(series_prefix("logs/run") == "run.");
+  const std::vector<std::string> args = logger_arguments(*p.logger, "/x/logs/exhibit-20261201");
+  const std::vector<std::string> expected = {"--rotate=0", "--split-mb=100", "--series=exhibit-", "--budget-mb=5000",
+                                             "--min-free-mb=1000", "--frame-rate=2", "--full-rate-before-s=8",
+                                             "--full-rate-after-s=10", "/x/logs/exhibit-20261201"};
+  CHECK(args == expected);
+  // Without a budget or frames: as before (rotate 10, every frame).
+  const Profile plain = parse_profile(R"({"modules":[],"logger":{"file":"logs/x"}})", "t");
+  CHECK(logger_arguments(*plain.logger, "f") == std::vector<std::string>{"--rotate=10", "--split-mb=100", "f"});
+  CHECK(error_of(R"({"modules":[],"logger":{"budget_mb":100,"split_mb":60}})").find("at most half of 'budget_mb'") !=
+        std::string::npos);
+  CHECK(error_of(R"({"modules":[],"logger":{"frames":{"rate":2,"window":3}}})").find("unknown key 'window'") !=
+        std::string::npos);
+  CHECK(error_of(R"({"modules":[],"logger":{"frames":{"rate":0}}})").find("'rate' must be >=") != std::string::npos);
+  CHECK(error_of(R"({"modules":[],"logger":{"frames":5}})").find("'frames' must be an object") != std::string::npos);
+}
+
+TEST_CASE("every shipped profile's logger command line is one bricklayer-logger accepts") {
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(BRICKLAYER_SOURCE_DIR) + "/launch/profiles")) {
+    if (entry.path().extension() != ".json") continue;
+    const Profile p = load_profile(entry.path().string());
+    if (!p.logger) continue;
+    std::string command = std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-logger --check-config";
+    for (const auto& a : logger_arguments(*p.logger, "/tmp/bricklayer-profile-check/x")) command += " '" + a + "'";
+    INFO(entry.path().filename().string() << ": " << command);
+    FILE* out = popen((command + " 2>&1").c_str(), "r");
+    REQUIRE(out);
+    std::string text;
+    char buf[4096];
+    while (fgets(buf, sizeof buf, out)) text += buf;
+    INFO(text);
+    CHECK(pclose(out) == 0);
+  }
+}

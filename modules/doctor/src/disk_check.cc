@@ -2,6 +2,7 @@
 
 #include <sys/statvfs.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -30,9 +31,16 @@ DiskBudget budget_from_plan(const HostPlan& plan, uint64_t min_free_bytes) {
   fs::path file = fs::path(plan.logger->file);
   if (!file.is_absolute()) file = fs::path(plan.root) / file;
   b.folder = file.parent_path().lexically_normal().string();
-  if (plan.logger->rotate > 0) {
-    b.max_bytes = static_cast<uint64_t>(plan.logger->rotate * plan.logger->split_mb * 1048576);  // the logger's MB are MiB
-    b.source = "rotate " + std::to_string(plan.logger->rotate) + " x split_mb " + std::to_string(static_cast<int>(plan.logger->split_mb));
+  const launcher::LoggerSpec& l = *plan.logger;
+  // The logger's own minimum, when the profile sets one, is what it keeps free: the doctor asks for it too.
+  b.min_free_bytes = std::max(min_free_bytes, static_cast<uint64_t>(l.min_free_mb * 1048576));
+  if (l.budget_mb > 0) {
+    b.max_bytes = static_cast<uint64_t>(l.budget_mb * 1048576);  // the logger's MB are MiB
+    b.source = "budget_mb " + std::to_string(static_cast<int64_t>(l.budget_mb)) + " of the series " +
+               launcher::series_prefix(l.file) + "*";
+  } else if (l.rotate > 0) {
+    b.max_bytes = static_cast<uint64_t>(l.rotate * l.split_mb * 1048576);
+    b.source = "rotate " + std::to_string(l.rotate) + " x split_mb " + std::to_string(static_cast<int>(l.split_mb));
   } else {
     b.source = "rotate 0 (old files are never deleted)";
   }

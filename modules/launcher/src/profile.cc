@@ -1,5 +1,7 @@
 #include "bricklayer/launcher/profile.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -126,15 +128,33 @@ Profile parse_profile(const std::string& json_text, const std::string& name) {
   }
   if (doc.contains("logger") && !doc.at("logger").is_null()) {
     const json& l = doc.at("logger");
-    check_keys(l, {"file", "rotate", "split_mb"}, where + " logger");
+    const std::string lw = where + " logger";
+    check_keys(l, {"file", "rotate", "split_mb", "budget_mb", "min_free_mb", "frames"}, lw);
     LoggerSpec spec;
     if (l.contains("file")) {
       if (!l.at("file").is_string() || l.at("file").get<std::string>().empty())
-        throw ProfileError(where + " logger: 'file' must be a non-empty string");
+        throw ProfileError(lw + ": 'file' must be a non-empty string");
       spec.file = l.at("file").get<std::string>();
     }
-    spec.rotate = static_cast<int>(number(l, "rotate", spec.rotate, where + " logger"));
-    spec.split_mb = number(l, "split_mb", spec.split_mb, where + " logger", 0.01);
+    spec.budget_mb = number(l, "budget_mb", 0, lw);
+    spec.min_free_mb = number(l, "min_free_mb", 0, lw);
+    // A budget bounds the series by itself: increment naming (rotation would rename what the index names).
+    spec.rotate = static_cast<int>(number(l, "rotate", spec.budget_mb > 0 ? 0 : spec.rotate, lw));
+    spec.split_mb = number(l, "split_mb", spec.split_mb, lw, 0.01);
+    if (spec.budget_mb > 0 && 2 * spec.split_mb > spec.budget_mb)
+      throw ProfileError(lw + ": 'split_mb' must be at most half of 'budget_mb' (the file being written is never deleted)");
+    if (l.contains("frames") && !l.at("frames").is_null()) {
+      const json& f = l.at("frames");
+      if (!f.is_object()) throw ProfileError(lw + ": 'frames' must be an object {rate, before_s, after_s}");
+      check_keys(f, {"rate", "before_s", "after_s"}, lw + " frames");
+      FrameSpec frames;
+      frames.rate = number(f, "rate", frames.rate, lw + " frames", 0.001);
+      frames.before_s = number(f, "before_s", frames.before_s, lw + " frames");
+      frames.after_s = number(f, "after_s", frames.after_s, lw + " frames");
+      if (frames.rate > 1000 || frames.before_s > 600 || frames.after_s > 600)
+        throw ProfileError(lw + " frames: rate at most 1000 a second, windows at most 600 s");
+      spec.frames = frames;
+    }
     p.logger = spec;
   }
   if (p.modules.empty() && !p.logger) throw ProfileError(where + ": nothing to launch (no modules, no logger)");
@@ -143,6 +163,32 @@ Profile parse_profile(const std::string& json_text, const std::string& name) {
   p.stop_timeout_s = number(doc, "stop_timeout_s", 5, where, 0.1);
   if (doc.contains("notes")) p.notes = strings(doc.at("notes"), where + " notes");
   return p;
+}
+
+std::string series_prefix(const std::string& file_pattern) {
+  const std::string name = std::filesystem::path(file_pattern).filename().string();
+  const auto percent = name.find('%');
+  return percent == std::string::npos ? name + "." : name.substr(0, percent);
+}
+
+std::vector<std::string> logger_arguments(const LoggerSpec& l, const std::string& file) {
+  auto text = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return std::string(buf);
+  };
+  // --rotate 0 means increment (FILE.00, FILE.01, ...), as lcm-logger's -i.
+  std::vector<std::string> args = {"--rotate=" + std::to_string(std::max(0, l.rotate)), "--split-mb=" + text(l.split_mb)};
+  if (l.budget_mb > 0 || l.min_free_mb > 0) args.push_back("--series=" + series_prefix(l.file));
+  if (l.budget_mb > 0) args.push_back("--budget-mb=" + text(l.budget_mb));
+  if (l.min_free_mb > 0) args.push_back("--min-free-mb=" + text(l.min_free_mb));
+  if (l.frames) {
+    args.push_back("--frame-rate=" + text(l.frames->rate));
+    args.push_back("--full-rate-before-s=" + text(l.frames->before_s));
+    args.push_back("--full-rate-after-s=" + text(l.frames->after_s));
+  }
+  args.push_back(file);
+  return args;
 }
 
 Profile load_profile(const std::string& path) {

@@ -58,12 +58,9 @@ LaunchPlan plan_launch(const Profile& profile, const SupervisorOptions& options)
     std::string file = strftime_now(l.file);
     fs::path full = fs::path(file).is_absolute() ? fs::path(file) : fs::path(options.root) / file;
     // bricklayer-logger (modules/logger): lcm-logger's file naming, without its silent 30-message
-    // queue. --rotate 0 means increment (FILE.00, FILE.01, ...), as lcm-logger's -i.
-    char split[32];
-    std::snprintf(split, sizeof(split), "%g", l.split_mb);
-    std::vector<std::string> argv = {"bricklayer-logger", "--lcm-url=" + options.lcm_url,
-                                     "--rotate=" + std::to_string(std::max(0, l.rotate)),
-                                     std::string("--split-mb=") + split, full.string()};
+    // queue; the profile's budget and frame policy as its flags.
+    std::vector<std::string> argv = {"bricklayer-logger", "--lcm-url=" + options.lcm_url};
+    for (auto& a : logger_arguments(l, full.string())) argv.push_back(std::move(a));
     plan.log_file = full.string() + (l.rotate > 0 ? ".0" : ".*");
     ModuleSpec spec;
     spec.name = "logger";

@@ -18,8 +18,9 @@ struct DiskBudget {
   std::string source;                  // where the budget came from, for the report
 };
 
-// From the profile's logger entry: rotate x split_mb bounds the series (the logger deletes the oldest
-// file beyond rotate files of at most split_mb each); min_free_bytes from the caller.
+// From the profile's logger entry: its budget_mb bounds the series (the logger deletes the oldest
+// recordings beyond it), else rotate x split_mb (the oldest file beyond rotate files of at most split_mb
+// each); the minimum free space is the larger of the caller's and the logger's min_free_mb.
 DiskBudget budget_from_plan(const HostPlan& plan, uint64_t min_free_bytes);
 
 CheckResult check_disk(const DiskBudget& budget);

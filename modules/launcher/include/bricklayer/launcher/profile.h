@@ -27,11 +27,27 @@ struct ModuleSpec {
   std::vector<std::string> env;              // extra "NAME=value" entries
 };
 
+// Camera frames outside the full-rate windows (modules/logger/README.md, "A day within a disk budget").
+struct FrameSpec {
+  double rate = 2;       // frames kept per second
+  double before_s = 10;  // every frame this long before a moment (red, collapse, round end, mark) ...
+  double after_s = 10;   // ... and this long after
+};
+
 struct LoggerSpec {
   std::string file = "logs/bricklayer-%Y%m%d-%H%M%S";  // strftime pattern, relative to the project root
-  int rotate = 10;       // keep FILE.0 .. FILE.<rotate-1>; 0 = never delete (increment instead)
+  int rotate = 10;       // keep FILE.0 .. FILE.<rotate-1>; 0 = increment (default when budget_mb is given)
   double split_mb = 100; // start a new file beyond this size
+  double budget_mb = 0;  // every recording of the series together at most; the oldest deleted first; 0 = none
+  double min_free_mb = 0;  // free space the logger leaves on the disk, deleting the oldest recordings
+  std::optional<FrameSpec> frames;  // thin camera frames; absent = keep every frame
 };
+
+// The recordings a budget covers: the file name of the pattern up to its first strftime conversion
+// ("logs/demo-%Y%m%d" -> "demo-"), or the whole name and a dot when it has none.
+std::string series_prefix(const std::string& file_pattern);
+// bricklayer-logger's arguments for the spec (after the program and --lcm-url), ending with the file.
+std::vector<std::string> logger_arguments(const LoggerSpec& spec, const std::string& file);
 
 struct Profile {
   std::string name;
