@@ -54,7 +54,7 @@ TEST_CASE("every frame from before_s before a moment to after_s after it is kept
   CHECK(q.release(2'000'000).size() == 1);
 }
 
-TEST_CASE("rate 0 keeps every frame and holds nothing; bad figures are refused") {
+TEST_CASE("rate 0 keeps every frame and holds nothing, and bad figures are refused") {
   logger::RecordingPolicy p({"BL_IMAGE", 0, 10, 10});
   CHECK_FALSE(p.thins());
   p.offer(ev("BL_IMAGE", 5));

@@ -1,59 +1,279 @@
-// bricklayer-replay: feeds a recorded LCM log through a module's logic in-process (no network, as fast
-// as possible) and, with --check, compares every output with the one recorded in the log.
+// bricklayer-replay: runs modules' real nodes on a recorded log, as fast as possible, and compares
+// their outputs with the recorded ones (--check), with another configuration or another build's
+// program (--diff), or rewrites a regression log's expected outputs (--update).
 //
-// Subscribes: nothing (reads the log file with lcm::LogFile). Publishes: nothing.
-// Exit code: 0 when every compared output is byte-identical, 1 on any mismatch, 2 on bad usage.
+// Subscribes: nothing (reads log files). Publishes: nothing.
+// Exit code: 0 when every compared output matches (and, for --diff, A and B agree); 1 on any mismatch
+// (or difference); 3 when the log is damaged or incomplete (torn or truncated stretches, parts gone,
+// events the logger could not keep), even with 0 mismatches; 2 on bad usage.
+#include <unistd.h>
+
 #include <chrono>
+#include <cstdio>
+#include <filesystem>
 #include <iostream>
+#include <memory>
+#include <sstream>
 
 #include "bricklayer/common/flags.h"
 #include "bricklayer/common/log.h"
-#include "bricklayer/replay/prediction_replay.h"
-#include "bricklayer/replay/replay.h"
+#include "bricklayer/inspect/progress.h"
+#include "bricklayer/launcher/process.h"
+#include "bricklayer/replay/checker.h"
+#include "bricklayer/replay/diff_report.h"
+#include "bricklayer/replay/module_registry.h"
+#include "bricklayer/replay/replayer.h"
+#include "bricklayer/replay/time_arg.h"
+#include "bricklayer/runtime/log_file.h"
 
 namespace {
 
 using namespace bricklayer;
+using namespace bricklayer::replay;
+namespace fs = std::filesystem;
+
+std::vector<std::string> split(const std::string& text, char sep) {
+  std::vector<std::string> out;
+  std::string item;
+  std::istringstream in(text);
+  while (std::getline(in, item, sep))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+int64_t first_event_utime(const std::vector<std::string>& sources) {
+  RecordingReader r(sources);
+  runtime::LogEvent e;
+  return r.next(e) ? e.utime : 0;
+}
+
+void print_modules(const Replayer& r, const std::string& label) {
+  for (const auto& m : r.modules()) {
+    std::cerr << "replay" << (label.empty() ? "" : " " + label) << ": " << m.name << " with "
+              << (m.config_recorded ? "its recorded configuration" : "its defaults") << " " << m.config_json << "\n";
+    for (const auto& n : m.notes) std::cerr << "replay: " << m.name << ": " << n << "\n";
+  }
+}
+
+// The other build's replay: its outputs in a log file, read back in time order.
+std::vector<std::tuple<int64_t, std::string, std::vector<uint8_t>>> run_program_b(const std::string& program,
+                                                                                    const std::vector<std::string>& base_args) {
+  const fs::path out = fs::temp_directory_path() / ("bricklayer-replay-b-" + std::to_string(::getpid()) + ".lcm");
+  std::vector<std::string> argv = {program};
+  argv.insert(argv.end(), base_args.begin(), base_args.end());
+  argv.push_back("--record-outputs");
+  argv.push_back(out.string());
+  argv.push_back("--no-progress");
+  launcher::SpawnOptions o;
+  auto p = launcher::Process::spawn(argv, o);
+  auto st = p.wait_for(std::chrono::hours(24));
+  if (!st || st->signal != 0 || (st->code != 0 && st->code != 3))
+    throw std::runtime_error("the other program (" + program + ") failed: " + (st ? st->describe() : "did not end"));
+  std::vector<std::tuple<int64_t, std::string, std::vector<uint8_t>>> events;
+  runtime::LogReader reader(out.string());
+  runtime::LogEvent e;
+  while (reader.next(e)) events.emplace_back(e.utime, e.channel, std::move(e.data));
+  fs::remove(out);
+  return events;
+}
 
 int Main(int argc, char** argv) {
   Flags flags("bricklayer-replay",
-              "Replays an LCM log (recorded by lcm-logger or launch/bricklayer) through a module's logic,\n"
-              "in-process and as fast as possible. With --check every output is compared byte for byte with\n"
-              "the one recorded for the same input (channel + utime + frame_number); each mismatch is printed\n"
-              "and the exit code is 1 on any. The last line is \"N compared, M mismatches (...)\".");
-  flags.add_positional("LOG", "an LCM log file");
-  flags.add("module", "prediction", "whose logic to replay (prediction)");
-  flags.add_bool("check", "compare every output with the recorded one; exit 1 on any mismatch");
-  flags.add("annotator", "", "prediction: annotator (default: the one recorded in the log, else exact)");
-  flags.add("solver", "", "prediction: LP backend (default: the one recorded in the log, else clp)");
-  flags.add("max-blocks", "1000", "prediction: the live process's --max-blocks");
-  flags.add("position-tolerance", "", "prediction: block lengths (default: the one recorded in the log, else 0.005)");
+              "Runs modules' real nodes on a recorded log as fast as possible (each from the configuration it\n"
+              "recorded on BL_CONFIG, --set overrides) and compares every output with the recorded one for the\n"
+              "same input (--check: the first divergence and the differing fields; exit 1 on any mismatch, 3 on a\n"
+              "damaged or incomplete log). --diff compares two replays (other settings with --set-b, or another\n"
+              "build's bricklayer-replay with --program-b). --update rewrites a regression log's expected outputs.\n"
+              "LOG: log files (parts) in order, or a recording's NAME.index. The last line of --check is\n"
+              "\"N compared, M mismatches (...)\".");
+  flags.add_positional_list("LOG", "log files in order, or one NAME.index");
+  flags.add("module", "prediction", "the modules to replay, chained in this order: prediction, or vision,prediction");
+  flags.add_bool("check", "compare every output with the recorded one; exit 1 on any mismatch, 3 on damage");
+  flags.add("set", "", "configuration overrides, comma-separated: annotator=paper or prediction.annotator=paper");
+  flags.add("from", "", "start: seconds into the log (90), a time of day (14:32:05) or a date and time");
+  flags.add("to", "", "end, as --from");
+  flags.add("ignore", "", "more fields never compared, comma-separated: prediction_t.blocks[].accel, hint_t");
+  flags.add_bool("diff", "compare two replays: A (--set) against B (--set plus --set-b, or --program-b)");
+  flags.add("set-b", "", "--diff: B's overrides on top of A's");
+  flags.add("program-b", "", "--diff: B is this bricklayer-replay (another build) with the same arguments");
+  flags.add("record-outputs", "", "write the replayed outputs into this LCM log");
+  flags.add_bool("update", "rewrite LOG: its recorded outputs become the replayed ones (a regression log)");
+  flags.add("max-printed", "10", "mismatches and divergences printed (all are counted)");
+  flags.add_bool("no-progress", "never print progress (it is printed on long runs: bytes, rate, time left)");
   flags.add("log-level", "info", "debug, info, warn or error");
   if (!flags.parse(argc, argv)) return 0;
   log::set_module("replay");
   log::set_level(log::parse_level(flags.get("log-level")));
-  if (flags.get("module") != "prediction")
-    throw FlagError("--module '" + flags.get("module") + "' has no replay yet (available: prediction)");
-  int64_t max_blocks = flags.get_int("max-blocks");
-  if (max_blocks < 1) throw FlagError("--max-blocks must be at least 1");
+  const std::vector<std::string> sources = flags.positional();
+  const int64_t max_printed = flags.get_int("max-printed");
+  if (max_printed < 0) throw FlagError("--max-printed must be >= 0");
 
-  std::unique_ptr<replay::PredictionReplay> module;
+  ReplayOptions options;
+  options.modules = split(flags.get("module"), ',');
+  options.sets = split(flags.get("set"), ',');
+  const int64_t log_start = first_event_utime(sources);
   try {
-    std::optional<double> tolerance;
-    if (!flags.get("position-tolerance").empty()) tolerance = flags.get_double("position-tolerance");
-    module = std::make_unique<replay::PredictionReplay>(flags.get("annotator"), flags.get("solver"),
-                                                        static_cast<size_t>(max_blocks), tolerance);
+    if (!flags.get("from").empty()) options.from_utime = parse_time_arg(flags.get("from"), log_start);
+    if (!flags.get("to").empty()) options.to_utime = parse_time_arg(flags.get("to"), log_start);
   } catch (const std::invalid_argument& e) {
-    throw FlagError(e.what());  // names the bad --annotator / --solver / --position-tolerance
+    throw FlagError(std::string("--from/--to: ") + e.what());
   }
-  auto t0 = std::chrono::steady_clock::now();
-  replay::ReplayReport report = replay::replay_log(flags.positional()[0], *module, flags.get_bool("check"), std::cout);
-  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::cerr << "replay: module " << module->name() << ", annotator " << module->config().annotator << ", solver "
-            << module->config().solver << ", position tolerance " << module->config().position_tolerance << ", "
-            << report.inputs << " inputs in " << seconds << " s\n";
-  std::cout << report.summary() << std::endl;
-  return report.ok() ? 0 : 1;
+  if (options.to_utime < options.from_utime) throw FlagError("--to is before --from");
+  std::vector<std::string> ignored = run_to_run_fields();
+  for (const auto& i : split(flags.get("ignore"), ',')) ignored.push_back(i);
+  const MessageDiff diff(ignored);
+  if (flags.get_bool("update") && (sources.size() != 1 || fs::path(sources[0]).extension() == ".index"))
+    throw FlagError("--update rewrites one log file (give exactly one part)");
+  if (flags.get_bool("diff") && flags.get("set-b").empty() && flags.get("program-b").empty())
+    throw FlagError("--diff needs --set-b or --program-b (what B changes)");
+
+  const bool tty = ::isatty(2);
+  inspect::Progress progress("bricklayer-replay", 0, false);
+  auto show_progress = [&](std::unique_ptr<inspect::Progress>& p, const RecordingReader& reader) {
+    if (!p) p = std::make_unique<inspect::Progress>("bricklayer-replay", static_cast<uint64_t>(reader.total_bytes()),
+                                                    !flags.get_bool("no-progress"));
+    p->update(static_cast<uint64_t>(reader.done_bytes()));
+  };
+  (void)tty;
+  std::unique_ptr<inspect::Progress> bar;
+  const auto t0 = std::chrono::steady_clock::now();
+
+  // --diff: two replays in lockstep, compared with each other.
+  if (flags.get_bool("diff")) {
+    DiffReport report(diff, "A", "B", log_start, static_cast<size_t>(max_printed));
+    std::cout << "A: " << (options.sets.empty() ? std::string("the recorded settings") : "--set " + flags.get("set")) << "\n"
+              << "B: " << (flags.get("program-b").empty() ? "" : flags.get("program-b") + " ")
+              << (flags.get("set-b").empty() ? std::string("the same settings") : "--set-b " + flags.get("set-b")) << "\n";
+    std::vector<std::string> compared;
+    auto is_compared = [&](const std::string& ch) { return std::find(compared.begin(), compared.end(), ch) != compared.end(); };
+    auto side_sink = [&](int side) {
+      return [&report, &is_compared, side](bool recorded, const std::string& ch, const std::vector<uint8_t>& bytes, int64_t utime) {
+        if (!recorded && is_compared(ch)) report.add(side, ch, bytes, utime);
+      };
+    };
+    Replayer a(sources, options, side_sink(0));
+    compared = a.compared_channels();
+    a.set_observer([](const runtime::LogEvent&) {});
+    print_modules(a, "A");
+    if (!flags.get("program-b").empty()) {
+      std::vector<std::string> args = sources;
+      for (const char* f : {"module", "set", "from", "to"})
+        if (!flags.get(f).empty()) args.push_back("--" + std::string(f) + "=" + flags.get(f));
+      if (!flags.get("set-b").empty()) {
+        std::string sets = flags.get("set");
+        sets += (sets.empty() ? "" : ",") + flags.get("set-b");
+        args.back() = "--set=" + sets;
+      }
+      auto b_events = run_program_b(flags.get("program-b"), args);
+      size_t next = 0;
+      while (a.advance()) {
+        while (next < b_events.size() && std::get<0>(b_events[next]) <= a.now_utime()) {
+          auto& [t, ch, bytes] = b_events[next++];
+          if (is_compared(ch)) report.add(1, ch, bytes, t);
+        }
+        report.advance(a.now_utime());
+        show_progress(bar, a.reader());
+      }
+      for (; next < b_events.size(); ++next)
+        if (is_compared(std::get<1>(b_events[next])))
+          report.add(1, std::get<1>(b_events[next]), std::get<2>(b_events[next]), std::get<0>(b_events[next]));
+    } else {
+      ReplayOptions ob = options;
+      for (const auto& s : split(flags.get("set-b"), ',')) ob.sets.push_back(s);
+      Replayer b(sources, ob, side_sink(1));
+      print_modules(b, "B");
+      bool more_a = true, more_b = true;
+      while (more_a || more_b) {
+        if (more_a && (!more_b || a.now_utime() <= b.now_utime())) more_a = a.advance();
+        else more_b = b.advance();
+        report.advance(std::min(more_a ? a.now_utime() : INT64_MAX, more_b ? b.now_utime() : INT64_MAX));
+        show_progress(bar, a.reader());
+      }
+    }
+    report.finish();
+    if (bar) bar->finish();
+    report.print(std::cout);
+    const auto damage = damage_report(a.reader(), options.from_utime, options.to_utime, nullptr);
+    for (const auto& d : damage) std::cout << "DAMAGED " << d << "\n";
+    std::cout << report.pairs() << " compared, " << report.differing() << " differ (" << report.only(0) << " only in A, "
+              << report.only(1) << " only in B)" << std::endl;
+    if (report.differing() > 0 || report.only(0) > 0 || report.only(1) > 0) return 1;
+    return damage.empty() ? 0 : 3;
+  }
+
+  // --check / --update / --record-outputs: one replay against the log.
+  Checker checker(diff, std::cout, log_start, static_cast<size_t>(max_printed));
+  const bool check = flags.get_bool("check");
+  std::unique_ptr<runtime::LogWriter> outputs, updated;
+  if (!flags.get("record-outputs").empty()) outputs = std::make_unique<runtime::LogWriter>(flags.get("record-outputs"));
+  const std::string update_tmp = sources[0] + ".updating";
+  if (flags.get_bool("update")) updated = std::make_unique<runtime::LogWriter>(update_tmp);
+  int64_t outputs_seen = 0;
+  std::vector<std::string> compared;
+  Replayer replayer(sources, options, [&](bool recorded, const std::string& ch, const std::vector<uint8_t>& bytes, int64_t utime) {
+    const bool is_compared = std::find(compared.begin(), compared.end(), ch) != compared.end();
+    if (!is_compared) return;
+    if (recorded) {
+      if (check) checker.recorded(ch, bytes, utime);
+      return;
+    }
+    ++outputs_seen;
+    if (check) checker.replayed(ch, bytes, utime);
+    if (outputs && !outputs->write(utime, ch, bytes.data(), bytes.size()))
+      throw std::runtime_error("cannot write " + flags.get("record-outputs"));
+    if (updated && !updated->write(utime, ch, bytes.data(), bytes.size())) throw std::runtime_error("cannot write " + update_tmp);
+  });
+  compared = replayer.compared_channels();
+  replayer.set_observer([&](const runtime::LogEvent& e) {
+    checker.observe(e);
+    // The regression log keeps everything but the replayed modules' recorded outputs.
+    if (updated && std::find(compared.begin(), compared.end(), e.channel) == compared.end() &&
+        !updated->write(e.utime, e.channel, e.data.data(), e.data.size()))
+      throw std::runtime_error("cannot write " + update_tmp);
+  });
+  print_modules(replayer, "");
+  if (check) {
+    std::string list;
+    for (const auto& i : ignored) list += (list.empty() ? "" : ", ") + i;
+    std::cerr << "replay: compared on " << [&] {
+      std::string c;
+      for (const auto& ch : compared) c += (c.empty() ? "" : ", ") + ch;
+      return c;
+    }() << "; never compared (run-to-run): " << list << "\n";
+  }
+  int64_t since = 0;
+  while (replayer.advance())
+    if (++since % 2000 == 0) show_progress(bar, replayer.reader());
+  if (bar) bar->finish();
+  checker.finish();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double span = static_cast<double>(replayer.last_utime() - replayer.first_utime()) / 1e6;
+  std::cerr << "replay: " << replayer.events() << " events (" << span << " s of log) in " << seconds << " s";
+  if (seconds > 0 && span > 0) std::cerr << ", " << span / seconds << " x real time";
+  std::cerr << "\n";
+  if (updated) {
+    if (!updated->flush()) throw std::runtime_error("cannot write " + update_tmp);
+    updated.reset();
+    fs::rename(update_tmp, sources[0]);
+    std::cout << "updated " << sources[0] << ": " << outputs_seen << " expected outputs of " << flags.get("module")
+              << " rewritten" << std::endl;
+  }
+  const auto damage = damage_report(replayer.reader(), options.from_utime, options.to_utime, &checker.losses());
+  for (const auto& d : damage) std::cout << "DAMAGED " << d << "\n";
+  for (const auto& [module, errors] : replayer.node_errors())
+    if (errors > 0) std::cout << "note: " << module << " counted " << errors << " errors (rejected inputs, failed computations)\n";
+  if (!check) {
+    std::cout << outputs_seen << " outputs replayed (" << replayer.events() << " log events)" << std::endl;
+    return damage.empty() ? 0 : 3;
+  }
+  const CheckCounts& c = checker.counts();
+  if (!checker.first_divergence().empty()) std::cout << "first divergence: " << checker.first_divergence() << "\n";
+  std::cout << c.compared << " compared, " << c.mismatches << " mismatches (" << replayer.events() << " log events, "
+            << outputs_seen << " outputs replayed, " << c.not_in_log << " not in the log, " << c.orphans
+            << " recorded outputs without their input" << (damage.empty() ? "" : "; THE LOG IS DAMAGED OR INCOMPLETE")
+            << ")" << std::endl;
+  if (c.mismatches > 0) return 1;
+  return damage.empty() ? 0 : 3;
 }
 
 }  // namespace
