@@ -198,4 +198,18 @@ TEST_CASE("a full disk is counted, never torn, the exhibit goes on, and the logg
   for (const auto& l : index.losses()) noted += l.events;
   CHECK(noted == static_cast<int64_t>(value(last, "lost")));
   CHECK(prediction.running());
+  // Replaying the recording reports the loss and fails, whatever the mismatches: from its index, and
+  // from its parts alone (the logger's heartbeats in them carry the loss).
+  std::vector<std::string> part_names;
+  for (const auto& p : parts) part_names.push_back(p.string());
+  for (const auto& sources : {std::vector<std::string>{(disk.mnt / "rec.index").string()}, part_names}) {
+    std::vector<std::string> args = sources;
+    args.insert(args.end(), {"--check", "--no-progress"});
+    const auto r = harness::run_program("bricklayer-replay", args, 60s);
+    INFO(sources.front() << "\n" << r.out << r.err);
+    CHECK(r.status.code == 3);
+    CHECK(r.out.find("DAMAGED ") != std::string::npos);
+    CHECK(r.out.find("could not keep") != std::string::npos);
+    CHECK(r.out.find("THE LOG IS DAMAGED OR INCOMPLETE") != std::string::npos);
+  }
 }
