@@ -31,7 +31,8 @@ TEST_CASE("all-in-one: the projector is display 1, the camera device 0 at 640x48
   CHECK_FALSE(p.controls.exposure);  // shipped empty: locked at what automatic exposure chose
   CHECK(p.calibration_file == "/exhibit/calibration.json");
   REQUIRE(p.logger);
-  CHECK(p.logger->rotate == 20);
+  CHECK(p.logger->budget_mb == 20000);  // a day within a budget, the oldest deleted first
+  CHECK(p.logger->min_free_mb == 2000);
 }
 
 TEST_CASE("camera-host and projector-host are each one of two hosts, the demo needs no hardware") {
