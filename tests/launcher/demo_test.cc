@@ -38,6 +38,7 @@ TEST_CASE("the demo profile runs headless, stops by itself, and its log replays 
   for (auto& m : profile["modules"])
     for (auto& arg : m["command"])
       if (arg == "logs/snapshots") arg = (dir / "snapshots").string();
+      else if (arg == "logs/rounds.json") arg = (dir / "rounds.json").string();
   std::ofstream(dir / "demo.json") << profile.dump(1);
 
   launcher::SpawnOptions o;

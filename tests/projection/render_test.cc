@@ -105,7 +105,7 @@ Hud hud_for(const Scene& scene) {
   hud.score = scene.score();
   hud.max_score = 87;
   hud.remaining_ms = 154000;
-  hud.round_state = RoundClock::State::kRunning;
+  hud.round_state = RoundState::kRunning;
   hud.num_blocks = static_cast<int>(scene.blocks().size());
   hud.overhang = scene.overhang();
   hud.best_overhang = 1.0;
@@ -242,7 +242,7 @@ TEST_CASE("an ended round and an empty board also keep green at 0") {
   Fixture f;
   Scene scene;
   Hud hud;
-  hud.round_state = RoundClock::State::kEnded;
+  hud.round_state = RoundState::kEnded;
   hud.max_score = 123;
   cv::Mat frame = f.draw(scene, board::BoardToProjector{}, hud);
   CHECK(green_pixels(frame) == 0);
@@ -284,4 +284,60 @@ TEST_CASE("a Gray-code pattern is shown pixel for pixel") {
   f.display.present();
   cv::Mat frame = f.display.read_frame();
   CHECK(cv::norm(frame, pattern, cv::NORM_INF) == 0);
+}
+
+TEST_CASE("a stale input takes the verdict colours off the blocks and says so in the middle") {
+  Fixture f;
+  Scene scene;
+  scene.set_stack(make_stack(3, {{1, 0, -0.5}, {2, 1, 0.3}}));
+  scene.set_prediction(make_prediction(3, {{1, block_prediction_t::STATE_STABLE}, {2, block_prediction_t::STATE_CAUSE}}));
+  board::BoardToProjector mapping;
+  Hud hud = hud_for(scene);
+  cv::Mat live = f.draw(scene, mapping, hud);
+  check_block_colour(live, mapping, scene.blocks()[1], kCauseRed);
+  CHECK(f.renderer.layout().notice.w == 0);
+  for (const char* words : {"camera not seeing", "waiting for the other machine"}) {
+    hud.notice = words;
+    cv::Mat stale = f.draw(scene, mapping, hud);
+    save_for_review(stale, std::string("stale-") + (words[0] == 'c' ? "camera" : "other") + ".png");
+    INFO(words);
+    check_block_colour(stale, mapping, scene.blocks()[0], kUnknownDimBlue);  // no frozen blue
+    check_block_colour(stale, mapping, scene.blocks()[1], kUnknownDimBlue);  // no frozen red
+    const SDL_Rect n = f.renderer.layout().notice;
+    CHECK(lit_pixels(stale, n) > 500);
+    CHECK(std::abs(n.x + n.w / 2 - 512) < 10);  // centred
+    CHECK(std::abs(n.y + n.h / 2 - 384) < 60);
+    CHECK(green_pixels(stale) == 0);
+  }
+}
+
+TEST_CASE("between rounds the display shows how to start, the last MAX and the day's best") {
+  Fixture f;
+  Scene scene;
+  Hud hud;
+  hud.round_state = RoundState::kIdle;
+  hud.rounds_today = 0;
+  f.draw(scene, board::BoardToProjector{}, hud);
+  CHECK(f.renderer.layout().day_best.w == 0);  // no round today: no line
+  CHECK(round_label(hud) == "place a block on the board to start");
+  hud.auto_start = false;
+  CHECK(round_label(hud) == "press S to start");
+  hud.auto_start = true;
+  hud.round_state = RoundState::kEnded;
+  hud.last_end = RoundEnd::kBoardCleared;
+  hud.max_score = 140;
+  hud.day_best = 230;
+  hud.rounds_today = 3;
+  CHECK(round_label(hud) == "ROUND OVER - clear the board to play again");
+  hud.last_end = RoundEnd::kTimeUp;
+  CHECK(round_label(hud) == "TIME UP - clear the board to play again");
+  cv::Mat frame = f.draw(scene, board::BoardToProjector{}, hud);
+  save_for_review(frame, "between-rounds.png");
+  const Layout layout = f.renderer.layout();
+  CHECK(lit_pixels(frame, layout.day_best) > 200);
+  CHECK(lit_pixels(frame, layout.max) > 200);
+  CHECK(lit_pixels(frame, layout.round_label) > 200);
+  CHECK(layout.day_best.y > layout.max.y);
+  CHECK(layout.day_best.x + layout.day_best.w > 1024 - 40);
+  CHECK(green_pixels(frame) == 0);
 }

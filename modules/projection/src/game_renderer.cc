@@ -95,16 +95,17 @@ void GameRenderer::outline(const SDL_FPoint* points, int count, Rgb colour) {
 
 void GameRenderer::draw_game(const Scene& scene, const board::BoardToProjector& mapping, const Hud& hud, int64_t anim_ms) {
   SDL_SetRenderDrawBlendMode(renderer_, SDL_BLENDMODE_NONE);
-  draw_blocks(scene, mapping);
-  draw_minimap(scene, anim_ms);
+  const bool stale = !hud.notice.empty();
+  draw_blocks(scene, mapping, stale);
+  draw_minimap(scene, anim_ms, stale);
   draw_hud(hud);
 }
 
-void GameRenderer::draw_blocks(const Scene& scene, const board::BoardToProjector& mapping) {
+void GameRenderer::draw_blocks(const Scene& scene, const board::BoardToProjector& mapping, bool stale) {
   for (const SceneBlock& b : scene.blocks()) {
     fill_quad({to_sdl(mapping.map(b.x, b.y)), to_sdl(mapping.map(b.x + 1, b.y)),
                to_sdl(mapping.map(b.x + 1, b.y + b.height)), to_sdl(mapping.map(b.x, b.y + b.height))},
-              colour_for(b.state));
+              colour_for(stale ? BlockState::kUnknown : b.state));
   }
 }
 
@@ -124,27 +125,49 @@ void GameRenderer::draw_hud(const Hud& hud) {
     std::snprintf(buffer, sizeof(buffer), "%ld%% of the best for %d block%s (%.2f)", percent, hud.num_blocks,
                   hud.num_blocks == 1 ? "" : "s", *hud.best_overhang);
     layout_.best = draw_text(kBest, font_small_, buffer, kTextDim, right, y, 2);
+    y = layout_.best.y + std::max(layout_.best.h, TTF_FontLineSkip(font_small_));
   } else {
     layout_.best = SDL_Rect{};
   }
+  if (hud.rounds_today > 0) {
+    layout_.day_best = draw_text(kDayBest, font_small_,
+                                 "BEST TODAY " + std::to_string(hud.day_best) + " (" + std::to_string(hud.rounds_today) +
+                                     (hud.rounds_today == 1 ? " round)" : " rounds)"),
+                                 kText, right, y, 2);
+  } else {
+    layout_.day_best = SDL_Rect{};
+  }
 
-  const bool warning = hud.round_state == RoundClock::State::kRunning && hud.remaining_ms <= 10000;
+  const bool warning = hud.round_state == RoundState::kRunning && hud.remaining_ms <= 10000;
   layout_.timer = draw_text(kTimer, font_big_, clock_text(hud.remaining_ms), warning ? kTextWarning : kText,
                             width_ / 2, margin, 1);
-  const char* label = hud.round_state == RoundClock::State::kIdle    ? "press S to start"
-                      : hud.round_state == RoundClock::State::kEnded ? "TIME UP"
-                                                                      : "";
-  layout_.round_label = draw_text(kRoundLabel, font_small_, label, kTextDim, width_ / 2,
+  layout_.round_label = draw_text(kRoundLabel, font_small_, round_label(hud), kTextDim, width_ / 2,
                                   layout_.timer.y + std::max(layout_.timer.h, TTF_FontLineSkip(font_big_)), 1);
+  if (!hud.notice.empty()) {
+    layout_.notice = draw_text(kNotice, font_mid_, hud.notice, kTextWarning, width_ / 2,
+                               height_ / 2 - TTF_FontHeight(font_mid_) / 2, 1);
+  } else {
+    layout_.notice = SDL_Rect{};
+  }
 }
 
-void GameRenderer::draw_minimap(const Scene& scene, int64_t anim_ms) {
+std::string round_label(const Hud& hud) {
+  switch (hud.round_state) {
+    case RoundState::kRunning: return "";
+    case RoundState::kIdle: return hud.auto_start ? "place a block on the board to start" : "press S to start";
+    case RoundState::kEnded: break;
+  }
+  std::string over = hud.last_end == RoundEnd::kTimeUp || !hud.last_end ? "TIME UP" : "ROUND OVER";
+  return hud.auto_start ? over + " - clear the board to play again" : over;
+}
+
+void GameRenderer::draw_minimap(const Scene& scene, int64_t anim_ms, bool stale) {
   const int margin = std::max(4, height_ / 48);
   const SDL_Rect box{margin, margin, width_ * 28 / 100, height_ * 24 / 100};
   layout_.minimap = box;
   const double h = scene.block_height();
-  const collapse_preview_t* preview = scene.preview_for_stack();
-  const hint_t* hint = scene.hint();
+  const collapse_preview_t* preview = stale ? nullptr : scene.preview_for_stack();
+  const hint_t* hint = stale ? nullptr : scene.hint();
 
   // Fit the pile (and the hint) with the surface edge in view.
   double xmin = -1.5, xmax = 1.5, ymax = 1.0;
@@ -176,7 +199,7 @@ void GameRenderer::draw_minimap(const Scene& scene, int64_t anim_ms) {
   fill_quad({at(xmin, ymin), at(0, ymin), at(0, 0), at(xmin, 0)}, kSurface);
   for (const SceneBlock& b : scene.blocks())
     fill_quad({at(b.x, b.y), at(b.x + 1, b.y), at(b.x + 1, b.y + b.height), at(b.x, b.y + b.height)},
-              colour_for(b.state));
+              colour_for(stale ? BlockState::kUnknown : b.state));
 
   // The collapse preview: the key frames played back in simulated time (linear between them), looped
   // with a pause at the end, drawn as outlines over the pile.

@@ -24,7 +24,9 @@ int Main(int argc, char** argv) {
   Flags flags("bricklayer-projection",
               "Lights every block from behind the board (blue stable, red cause, magenta moving), shows score,\n"
               "MAX, round timer and a miniature of the pile, beeps when a red block appears, and shows\n"
-              "calibration patterns on command. Keys: S start, R reset, H hint, P snapshot, Esc/Q quit.");
+              "calibration patterns on command. Rounds start by themselves when blocks appear on an empty board\n"
+              "and end after --round-seconds or when the board stays empty. Keys: S start, R reset, H hint,\n"
+              "P snapshot, Esc/Q quit.");
   flags.add("lcm-url", "", "LCM URL (default: $LCM_DEFAULT_URL, else host-only udpm ttl=0)");
   flags.add("log-level", "info", "debug, info, warn or error");
   flags.add("display", "", "borderless fullscreen on display index i (0 = first)");
@@ -35,6 +37,12 @@ int Main(int argc, char** argv) {
   flags.add("snapshot-dir", "", "folder for PNG snapshots (latest.png, snapshot-NNNN.png on key P / command SNAPSHOT)");
   flags.add("snapshot-every", "0", "seconds between periodic snapshots into latest.png (0 = only on request)");
   flags.add("round-seconds", "180", "round length, seconds");
+  flags.add("round-start-hold", "2", "blocks on a board seen empty this long start a round by themselves, seconds");
+  flags.add("round-arm-empty", "1", "the board must be seen empty this long before blocks start the next round, seconds");
+  flags.add("round-end-empty", "20", "a round ends early when the board stays empty this long, seconds");
+  flags.add_bool("no-auto-start", "rounds start only on key S or START_ROUND");
+  flags.add("rounds-file", "", "the round book: history and the day's best, kept across restarts (\"\" = not kept)");
+  flags.add("stale-seconds", "3", "no stacks (or no predictions) this long: the board says so instead of a frozen verdict (0 = never)");
   flags.add("best-overhang", BRICKLAYER_DEFAULT_BEST_OVERHANG,
             "best overhang per block count, JSON {\"1\":0.5,...}; missing file = line not shown");
   flags.add("font", projection::kDefaultFontPath, "TrueType font for the text");
@@ -73,7 +81,19 @@ int Main(int argc, char** argv) {
   options.snapshot_every_s = flags.get_double("snapshot-every");
   const double round_seconds = flags.get_double("round-seconds");
   if (round_seconds <= 0 || round_seconds > 86400) throw FlagError("--round-seconds must be in (0, 86400]");
-  options.round_ms = static_cast<int64_t>(round_seconds * 1000);
+  options.rounds.duration_us = static_cast<int64_t>(round_seconds * 1e6);
+  auto hold = [&flags](const char* name) {
+    const double s = flags.get_double(name);
+    if (!(s >= 0 && s <= 3600)) throw FlagError(std::string("--") + name + " must be in [0, 3600]");
+    return static_cast<int64_t>(s * 1e6);
+  };
+  options.rounds.start_hold_us = hold("round-start-hold");
+  options.rounds.arm_empty_us = hold("round-arm-empty");
+  options.rounds.end_empty_us = hold("round-end-empty");
+  options.rounds.auto_start = !flags.get_bool("no-auto-start");
+  options.rounds_file = flags.get("rounds-file");
+  options.stale_after_s = flags.get_double("stale-seconds");
+  if (!(options.stale_after_s >= 0 && options.stale_after_s <= 3600)) throw FlagError("--stale-seconds must be in [0, 3600]");
   options.best_overhang_path = flags.get("best-overhang");
   options.font_path = flags.get("font");
   options.state_width = static_cast<int>(flags.get_int("state-width"));

@@ -13,6 +13,7 @@
 
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/log.h"
+#include "bricklayer/projection/round_book.h"
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/round_t.hpp"
 #include "bricklayer/timing_t.hpp"
@@ -48,9 +49,11 @@ ProjectionApp::ProjectionApp(const ProjectionOptions& options)
       calibration_in_(module_.counters()),
       hint_in_(module_.counters()),
       preview_in_(module_.counters()),
-      round_(options.round_ms, [this] { return now_ms(); }),
+      round_(options.rounds),
+      watch_(wall_utime(), static_cast<int64_t>(options.stale_after_s * 1e6)),
       debounce_(options.beep_hold_ms, options.beep_rearm_ms),
       started_(std::chrono::steady_clock::now()) {
+  if (!(options.stale_after_s >= 0)) throw std::invalid_argument("--stale-seconds must be >= 0");
   if (options.fps < 1 || options.fps > 1000) throw std::invalid_argument("--fps must be in 1..1000");
   if (options.state_width < 16 || options.state_width > options.display.width)
     throw std::invalid_argument("--state-width must be in 16.." + std::to_string(options.display.width));
@@ -71,6 +74,8 @@ ProjectionApp::ProjectionApp(const ProjectionOptions& options)
       log::warn(e.what(), "; the best-overhang line is not shown");
     }
   }
+
+  restore_rounds();
 
   display_ = std::make_unique<Display>(options.display);
   renderer_ = std::make_unique<GameRenderer>(display_->renderer(), options.display.width, options.display.height,
@@ -101,6 +106,42 @@ int64_t ProjectionApp::now_us() const {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - started_).count();
 }
 int64_t ProjectionApp::now_ms() const { return now_us() / 1000; }
+int64_t ProjectionApp::clock_utime() const { return wall_utime(); }
+
+void ProjectionApp::restore_rounds() {
+  if (options_.rounds_file.empty()) return;
+  RoundBook book;
+  try {
+    book = load_round_book(options_.rounds_file);
+  } catch (const std::exception& e) {
+    // Kept aside for a person to look at; the exhibit goes on with a fresh book.
+    const std::string aside = options_.rounds_file + ".damaged";
+    std::error_code ec;
+    std::filesystem::rename(options_.rounds_file, aside, ec);
+    ++module_.counters().errors;
+    log::error(e.what(), "; kept as ", aside, ", starting a new round book");
+  }
+  const size_t rounds = book.history.size();
+  const bool running = book.running.has_value();
+  round_.restore(std::move(book.history), book.running, clock_utime());
+  saved_revision_ = round_.revision();
+  if (rounds > 0 || running)
+    log::info("round book ", options_.rounds_file, ": ", rounds, " round(s)", running ? ", one running" : "",
+              "; today's best ", round_.day_best(clock_utime()));
+  if (running && round_.state() != RoundState::kRunning) save_rounds();  // closed while we were down
+}
+
+void ProjectionApp::save_rounds() {
+  if (options_.rounds_file.empty()) return;
+  try {
+    save_round_book(options_.rounds_file, RoundBook{round_.history(), round_.running()});
+    saved_revision_ = round_.revision();
+  } catch (const std::exception& e) {
+    ++module_.counters().errors;
+    saved_revision_ = round_.revision();  // tried: the next change tries again, no retry storm
+    log::error(e.what());
+  }
+}
 
 int ProjectionApp::run() {
   Module::install_signal_handlers();
@@ -175,8 +216,8 @@ void ProjectionApp::handle_events() {
     switch (event.key.keysym.sym) {
       case SDLK_ESCAPE:
       case SDLK_q: quit_ = true; break;
-      case SDLK_s: round_.start(); dirty_ = true; break;
-      case SDLK_r: round_.reset(); dirty_ = true; break;
+      case SDLK_s: round_.start(clock_utime()); dirty_ = true; break;
+      case SDLK_r: round_.reset(clock_utime()); dirty_ = true; break;
       case SDLK_h: request_hint(); break;
       case SDLK_p: snapshot_requested_ = true; break;
       default: break;
@@ -231,6 +272,13 @@ void ProjectionApp::apply_inputs() {
       }
       dirty_ = true;
       stack_arrived_ms_ = now_ms();
+      // Only a measurement says what is on the board: a frame that could not be read or a covered
+      // board is neither empty nor a pile, and counts as the camera not seeing.
+      if (s->status == stack_t::STATUS_OK) {
+        const int64_t now = clock_utime();
+        watch_.stack_seen(now);
+        round_.board_seen(now, static_cast<int>(scene_.blocks().size()));
+      }
     } catch (const std::exception& e) {
       ++module_.counters().errors;
       log::warn("stack rejected: ", e.what());
@@ -240,6 +288,7 @@ void ProjectionApp::apply_inputs() {
     try {
       scene_.set_prediction(*p);
       last_prediction_ms_ = now_ms();
+      watch_.prediction_seen(clock_utime());
       pending_latency_ = prediction_stamp_;
       dirty_ = true;
     } catch (const std::exception& e) {
@@ -269,8 +318,8 @@ void ProjectionApp::apply_inputs() {
 
 void ProjectionApp::apply_command(const command_t& c) {
   switch (c.command) {
-    case command_t::START_ROUND: round_.start(); dirty_ = true; break;
-    case command_t::RESET_ROUND: round_.reset(); dirty_ = true; break;
+    case command_t::START_ROUND: round_.start(clock_utime()); dirty_ = true; break;
+    case command_t::RESET_ROUND: round_.reset(clock_utime()); dirty_ = true; break;
     case command_t::SHOW_PATTERN:
       try {
         cv::Mat image = render_command_pattern(c, display_->width(), display_->height());
@@ -297,14 +346,25 @@ void ProjectionApp::tick() {
   const int64_t now = now_ms();
   const prediction_t* p = scene_.prediction_for_stack();
   const bool balanced = p && p->status == prediction_t::STATUS_OK && p->balanced;
-  round_.set_pile(scene_.score(), balanced);
-  const bool round_changed = round_.update();
+  const int64_t clock = clock_utime();
+  const InputProblem problem = watch_.problem(clock);
+  if (problem != shown_problem_) {
+    shown_problem_ = problem;
+    dirty_ = true;
+    if (problem == InputProblem::kNone) log::info("inputs are back");
+    else log::warn(watch_.status(clock));
+  }
+  // A stale verdict scores nothing: MAX takes only what is live.
+  round_.pile(clock, scene_.score(), balanced && problem == InputProblem::kNone, static_cast<int>(scene_.blocks().size()));
+  const bool round_changed = round_.update(clock);
   if (round_changed) dirty_ = true;
+  if (round_.revision() != saved_revision_) save_rounds();
   if (round_changed || now >= next_round_publish_ms_) {
     publish_round();
     next_round_publish_ms_ = now + 1000;
   }
-  if (debounce_.update(!pattern_ && scene_.any_cause(), now) && beeper_) beeper_->beep();
+  if (debounce_.update(!pattern_ && problem == InputProblem::kNone && scene_.any_cause(), now) && beeper_)
+    beeper_->beep();
   if (now >= next_heartbeat_ms_) {
     if (!latencies_us_.empty()) {
       std::vector<int64_t> recent(latencies_us_.end() - std::min<size_t>(latencies_us_.size(), 200), latencies_us_.end());
@@ -313,7 +373,10 @@ void ProjectionApp::tick() {
     }
     module_.set_value("frames", static_cast<double>(frames_presented_));
     module_.set_value("calibrated", mapping_.calibrated() ? 1 : 0);
-    module_.set_status(pattern_ ? "pattern" : "ok");
+    module_.set_value("day_best", round_.day_best(clock));
+    module_.set_value("rounds_today", round_.rounds_today(clock));
+    const std::string stale = watch_.status(clock);
+    module_.set_status(pattern_ ? "pattern" : stale.empty() ? "ok" : stale);
     module_.publish_heartbeat();
     next_heartbeat_ms_ = now + 1000;
   }
@@ -321,10 +384,10 @@ void ProjectionApp::tick() {
 
 void ProjectionApp::publish_round() {
   round_t r{};
-  r.utime = wall_utime();
+  r.utime = clock_utime();
   r.state = static_cast<int8_t>(round_.state());
   r.duration_ms = round_.duration_ms();
-  r.remaining_ms = round_.remaining_ms();
+  r.remaining_ms = round_.remaining_ms(r.utime);
   r.score = round_.score();
   r.max_score = round_.max_score();
   r.num_blocks = static_cast<int32_t>(scene_.blocks().size());
@@ -340,8 +403,14 @@ void ProjectionApp::draw_and_present() {
     Hud hud;
     hud.score = round_.score();
     hud.max_score = round_.max_score();
-    hud.remaining_ms = round_.remaining_ms();
+    const int64_t clock = clock_utime();
+    hud.remaining_ms = round_.remaining_ms(clock);
     hud.round_state = round_.state();
+    if (const RoundRecord* last = round_.last_round()) hud.last_end = last->end;
+    hud.auto_start = round_.rules().auto_start;
+    hud.day_best = round_.day_best(clock);
+    hud.rounds_today = round_.rounds_today(clock);
+    hud.notice = input_problem_words(watch_.problem(clock));
     hud.num_blocks = static_cast<int>(scene_.blocks().size());
     hud.overhang = scene_.overhang();
     hud.best_overhang = best_overhang_.best_for(hud.num_blocks);

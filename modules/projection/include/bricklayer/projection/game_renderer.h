@@ -2,6 +2,8 @@
 // projector coordinates with its predicted colour; score, MAX and how close the pile is to the best
 // possible top right; the round timer top centre; a miniature of the pile with its prediction, the
 // animated collapse preview and the hint outline top left) or a calibration pattern full screen.
+// While an input is stale (Hud::notice) the blocks lose their verdict colours (dim blue, no ghost,
+// no hint) and the notice is shown in the middle: a frozen red or blue must not pass for the truth.
 // Every colour of the game display comes from palette.h: green stays 0 in every pixel.
 #pragma once
 
@@ -17,7 +19,7 @@
 
 #include "bricklayer/board/board_to_projector.h"
 #include "bricklayer/projection/palette.h"
-#include "bricklayer/projection/round_clock.h"
+#include "bricklayer/projection/round_referee.h"
 #include "bricklayer/projection/scene.h"
 
 namespace bricklayer::projection {
@@ -29,7 +31,12 @@ struct Hud {
   int score = 0;
   int max_score = 0;
   int64_t remaining_ms = 0;
-  RoundClock::State round_state = RoundClock::State::kIdle;
+  RoundState round_state = RoundState::kIdle;
+  std::optional<RoundEnd> last_end;     // why the last round ended (shown while it is over)
+  bool auto_start = true;               // rounds start by themselves: idle says "place a block"
+  int day_best = 0;                     // the best MAX of today's rounds
+  int rounds_today = 0;                 // 0: the day's best line is not shown
+  std::string notice;                   // an input problem in words ("camera not seeing"); "" = none
   int num_blocks = 0;
   double overhang = 0;                  // block lengths
   std::optional<double> best_overhang;  // best possible for num_blocks; nothing = line not shown
@@ -45,7 +52,12 @@ struct Layout {
   SDL_Rect timer{};
   SDL_Rect round_label{};
   SDL_Rect minimap{};
+  SDL_Rect day_best{};
+  SDL_Rect notice{};
 };
+
+// The line under the timer: how to start a round, or how the last one ended.
+std::string round_label(const Hud& hud);
 
 class GameRenderer {
  public:
@@ -69,14 +81,14 @@ class GameRenderer {
     int w = 0;
     int h = 0;
   };
-  enum Slot { kScore, kScoreLabel, kMax, kBest, kTimer, kRoundLabel, kSlotCount };
+  enum Slot { kScore, kScoreLabel, kMax, kBest, kTimer, kRoundLabel, kDayBest, kNotice, kSlotCount };
   // Draws text with its top edge at y; align: 0 left of x, 1 centred on x, 2 right of x.
   SDL_Rect draw_text(Slot slot, TTF_Font* font, const std::string& text, Rgb colour, int x, int y, int align);
   void fill_quad(const std::array<SDL_FPoint, 4>& corners, Rgb colour);
   void outline(const SDL_FPoint* points, int count, Rgb colour);
-  void draw_blocks(const Scene& scene, const board::BoardToProjector& mapping);
+  void draw_blocks(const Scene& scene, const board::BoardToProjector& mapping, bool stale);
   void draw_hud(const Hud& hud);
-  void draw_minimap(const Scene& scene, int64_t anim_ms);
+  void draw_minimap(const Scene& scene, int64_t anim_ms, bool stale);
 
   SDL_Renderer* renderer_;
   int width_;

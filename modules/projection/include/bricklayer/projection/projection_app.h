@@ -11,7 +11,9 @@
 //             command applied;
 //             BL_COMMAND (command_t REQUEST_HINT) when H is pressed;
 //             BL_TIMING (timing_t, stage "present") prediction received -> frame presented;
-//             BL_HEARTBEAT once a second.
+//             BL_HEARTBEAT once a second (values day_best, rounds_today; status says a stale input).
+// Rounds run themselves (round_referee.h) and are kept in the round book (round_book.h) when
+// --rounds-file is given; time is this process's bus clock (the wall clock on LCM, as LcmBus's).
 #pragma once
 
 #include <cstdint>
@@ -34,7 +36,8 @@
 #include "bricklayer/projection/display.h"
 #include "bricklayer/projection/game_renderer.h"
 #include "bricklayer/projection/red_debounce.h"
-#include "bricklayer/projection/round_clock.h"
+#include "bricklayer/projection/input_watch.h"
+#include "bricklayer/projection/round_referee.h"
 #include "bricklayer/projection/scene.h"
 #include "bricklayer/stack_t.hpp"
 
@@ -45,7 +48,9 @@ struct ProjectionOptions {
   DisplayOptions display;
   std::string font_path = kDefaultFontPath;
   std::string best_overhang_path;      // "" = no table
-  int64_t round_ms = 180000;
+  RoundRules rounds;                   // duration, start/end holds, auto start
+  std::string rounds_file;             // the round book (history, day's best); "" = kept in memory only
+  double stale_after_s = 3;            // no stacks / predictions this long: say so on the board (0 = never)
   std::string snapshot_dir;            // "" = no snapshots
   double snapshot_every_s = 0;         // 0 = only on request (key P, command SNAPSHOT)
   int state_width = 256;               // width of the game image in projector_state_t
@@ -79,7 +84,8 @@ class ProjectionApp {
   Module& module() { return module_; }
   Display& display() { return *display_; }
   const Scene& scene() const { return scene_; }
-  const RoundClock& round() const { return round_; }
+  const RoundReferee& round() const { return round_; }
+  InputProblem input_problem() const { return watch_.problem(clock_utime()); }
   const Beeper* beeper() const { return beeper_.get(); }
   // Prediction received -> frame presented, microseconds, one per presented prediction.
   const std::vector<int64_t>& present_latencies_us() const { return latencies_us_; }
@@ -99,6 +105,10 @@ class ProjectionApp {
   void draw_and_present();
   void capture_if_due();
   void publish_round();
+  void save_rounds();
+  void restore_rounds();
+  // The bus clock: microseconds since the epoch (the live LCM bus's clock is the wall clock).
+  int64_t clock_utime() const;
   void request_hint();
   bool awaiting_prediction() const;
   int64_t now_ms() const;
@@ -122,7 +132,10 @@ class ProjectionApp {
 
   Scene scene_;
   board::BoardToProjector mapping_;
-  RoundClock round_;
+  RoundReferee round_;
+  InputWatch watch_;
+  uint64_t saved_revision_ = 0;
+  InputProblem shown_problem_ = InputProblem::kNone;
   RedDebounce debounce_;
   std::optional<cv::Mat> pattern_;
   int64_t pattern_sequence_ = -1;
