@@ -20,6 +20,7 @@
 #include "bricklayer/core/contacts.h"
 #include "bricklayer/core/dynamics.h"
 #include "bricklayer/core/generate.h"
+#include "bricklayer/core/knife_edge.h"
 #include "bricklayer/core/predict.h"
 
 // Heap accounting through operator new (CLP and Eigen allocate through it; NLopt's C core uses malloc and
@@ -58,6 +59,7 @@ struct Config {
   QpMethod qp;
   bool lp_first;
   std::string label;
+  double uncertainty = -1.0;  // >= 0: judge_knife_edge with this half-width for every block (margin included)
 };
 
 // CPU time of this thread: unlike wall time it does not count the time other processes take the core
@@ -129,6 +131,8 @@ int main(int argc, char** argv) {
   }
   const std::vector<Config> configs{
       {Annotator::kExact, "clp", QpMethod::kNnls, false, "exact nnls"},
+      {Annotator::kExact, "clp", QpMethod::kNnls, false, "knife-edge u=0.003", 0.003},
+      {Annotator::kExact, "clp", QpMethod::kNnls, false, "knife-edge u=0.005", 0.005},
       {Annotator::kExact, "clp", QpMethod::kNlopt, false, "exact nlopt-qp"},
       {Annotator::kExact, "clp", QpMethod::kNnls, true, "exact clp-first+nnls"},
       {Annotator::kExact, "nlopt", QpMethod::kNnls, true, "exact nlopt-first+nnls"},
@@ -158,6 +162,8 @@ int main(int argc, char** argv) {
       std::vector<double> ms;
       std::vector<double> cpu;
       int unbalanced = 0;
+      int knife = 0;
+      int max_lps = 0;
       int failures = 0;
       size_t peak = 0;
       for (int k = 0; k < count; ++k) {
@@ -170,7 +176,17 @@ int main(int argc, char** argv) {
           const double c0 = thread_cpu_ms();
           const auto t0 = std::chrono::steady_clock::now();
           try {
-            is_balanced = predict(stacks[static_cast<size_t>(k)], options).balanced;
+            const Stack& pile = stacks[static_cast<size_t>(k)];
+            if (c.uncertainty >= 0.0) {
+              const KnifeEdgeVerdict v = judge_knife_edge(pile, std::vector<double>(pile.blocks.size(), c.uncertainty), options);
+              is_balanced = v.nominal.balanced;
+              if (rep == 0) {
+                knife += v.certainty == Certainty::kKnifeEdge ? 1 : 0;
+                max_lps = std::max(max_lps, v.linear_programs);
+              }
+            } else {
+              is_balanced = predict(pile, options).balanced;
+            }
           } catch (const std::exception& e) {
             ++failures;
             if (failures == 1) std::fprintf(stderr, "%s n=%d pile %d: %s\n", c.label.c_str(), n, k, e.what());
@@ -188,6 +204,9 @@ int main(int argc, char** argv) {
                   100.0 * unbalanced / count, percentile(ms, 0.5), percentile(ms, 0.99),
                   *std::max_element(ms.begin(), ms.end()), percentile(cpu, 0.5), percentile(cpu, 0.99), peak / 1024.0,
                   failures ? ("  FAILED " + std::to_string(failures)).c_str() : "");
+      if (c.uncertainty >= 0.0) {
+        std::printf("%-24s %6d   knife edges %.0f%%, at most %d LPs per pile\n", "", n, 100.0 * knife / count, max_lps);
+      }
       std::fflush(stdout);
     }
   }

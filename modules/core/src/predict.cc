@@ -305,6 +305,17 @@ void annotate_exact(const ContactGraph& g, const PredictOptions& options, Predic
 
 }  // namespace
 
+std::vector<BlockState> exact_states(const ContactGraph& graph, QpMethod qp) {
+  PredictOptions options;
+  options.qp = qp;
+  Prediction p;
+  p.blocks.resize(graph.size());
+  annotate_exact(graph, options, p);
+  std::vector<BlockState> out(graph.size());
+  for (size_t i = 0; i < graph.size(); ++i) out[i] = p.blocks[i].state;
+  return out;
+}
+
 double balance_violation(const ContactGraph& g, const std::string& solver, const std::vector<char>& free) {
   opt::Problem problem;
   std::vector<int> contact_var;

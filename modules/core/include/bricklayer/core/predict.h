@@ -84,6 +84,10 @@ Prediction predict(const Stack& stack, const PredictOptions& options = {});
 // flag is 0 are held fixed. Throws SolverError when the backend fails.
 double balance_violation(const ContactGraph& graph, const std::string& solver, const std::vector<char>& free = {});
 
+// The exact annotator's block states on a contact graph the caller built (predict() builds it from the stack;
+// the knife-edge judgement builds narrowed ones). Throws SolverError when the QP fails.
+std::vector<BlockState> exact_states(const ContactGraph& graph, QpMethod qp = QpMethod::kNnls);
+
 // Overhang in block lengths and the score, without solving anything.
 double overhang(const Stack& stack);
 int32_t score_of(double overhang_in_block_lengths);
