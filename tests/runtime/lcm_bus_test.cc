@@ -108,3 +108,17 @@ TEST_CASE("an interface that goes down and up: sends fail meanwhile, and the bus
   CHECK(handle_until(bus, [&] { send(bus, "HB", "after"); return !got.empty(); }, 5s));
   CHECK(bus.problem().empty());
 }
+
+TEST_CASE("a bus that publishes its loopback channel but subscribes to nothing hears itself and is never reopened") {
+  // A camera publishes frames and its heartbeat and listens to nothing: LCM delivers only subscribed
+  // channels, so the bus must listen to its loopback channel itself, or it would reopen every silence_s.
+  LcmBus bus(kUrl, LcmBusOptions{"HB", 0.5, 0.2});
+  REQUIRE(bus.open());
+  const auto until = std::chrono::steady_clock::now() + 2s;
+  while (std::chrono::steady_clock::now() < until) {
+    REQUIRE(send(bus, "HB", "beat"));
+    bus.handle(100);
+  }
+  CHECK(bus.reopens() == 0);
+  CHECK(bus.problem().empty());
+}

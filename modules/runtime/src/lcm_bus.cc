@@ -78,6 +78,10 @@ void LcmBus::try_open() {
   }
   lcm_ = std::move(lcm);
   for (ChannelContext& c : contexts_) subscribe_on_lcm(c);
+  // The loopback check needs this process's own messages back, whether or not a node subscribes to
+  // that channel (a camera subscribes to nothing): LCM delivers only what is subscribed.
+  if (!options_.loopback_channel.empty())
+    lcm_->subscribeFunction(options_.loopback_channel, &LcmBus::on_own_message, this);
   if (ever_open_) {
     ++reopens_;
     log::info("LCM bus at ", url_, " open again");
@@ -112,6 +116,11 @@ void LcmBus::on_message(const lcm::ReceiveBuffer* rbuf, const std::string& chann
                              self.now_utime());
   } catch (...) {
   }
+}
+
+void LcmBus::on_own_message(const lcm::ReceiveBuffer*, const std::string&, LcmBus* self) {
+  self->last_heard_ = Steady::now();
+  self->unheard_publish_ = false;
 }
 
 bool LcmBus::publish(const std::string& channel, const uint8_t* data, size_t size) {

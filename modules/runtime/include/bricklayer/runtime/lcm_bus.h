@@ -61,6 +61,7 @@ class LcmBus final : public Bus {
     std::string channel;  // the pattern LCM matched
   };
   static void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel, ChannelContext* context);
+  static void on_own_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel, LcmBus* self);
   void try_open();
   void close(const std::string& why);
   void subscribe_on_lcm(ChannelContext& context);
