@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <functional>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -20,6 +21,7 @@
 #include "../common/spawn_util.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/module.h"
+#include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/image_t.hpp"
 
 using namespace bricklayer;
@@ -98,10 +100,10 @@ TEST_CASE("a video file is published frame by frame as JPEG") {
   fs::remove_all(dir);
 }
 
-TEST_CASE("missing sources and bad flags are clear errors with a non-zero exit") {
-  CHECK(wait_exit(spawn({kBin, "--device", "/dev/video-none", "--lcm-url", kUrl}), 10) == 1);
-  CHECK(wait_exit(spawn({kBin, "--video", "/nonexistent.avi", "--lcm-url", kUrl}), 10) == 1);
-  CHECK(wait_exit(spawn({kBin, "--images", "/nonexistent-dir", "--lcm-url", kUrl}), 10) == 1);
+TEST_CASE("with --exit-when-missing a missing source is a clear error, and bad flags always are") {
+  CHECK(wait_exit(spawn({kBin, "--device", "/dev/video-none", "--exit-when-missing", "--lcm-url", kUrl}), 10) == 1);
+  CHECK(wait_exit(spawn({kBin, "--video", "/nonexistent.avi", "--exit-when-missing", "--lcm-url", kUrl}), 10) == 1);
+  CHECK(wait_exit(spawn({kBin, "--images", "/nonexistent-dir", "--exit-when-missing", "--lcm-url", kUrl}), 10) == 1);
   CHECK(wait_exit(spawn({kBin, "--images", "/tmp", "--video", "x.avi", "--lcm-url", kUrl}), 10) == 2);
   CHECK(wait_exit(spawn({kBin, "--images", "/tmp", "--format", "gif", "--lcm-url", kUrl}), 10) == 2);
   CHECK(wait_exit(spawn({kBin, "--images", "/tmp", "--exposure", "fast", "--lcm-url", kUrl}), 10) == 2);
@@ -109,8 +111,99 @@ TEST_CASE("missing sources and bad flags are clear errors with a non-zero exit")
   // --list-controls asks the kernel: /dev/null is a device node but not a camera.
   CHECK(wait_exit(spawn({kBin, "--device", "/dev/null", "--list-controls"}), 10) == 1);
   fs::path empty = temp_dir("empty");
-  CHECK(wait_exit(spawn({kBin, "--images", empty.string(), "--lcm-url", kUrl}), 10) == 1);
+  CHECK(wait_exit(spawn({kBin, "--images", empty.string(), "--exit-when-missing", "--lcm-url", kUrl}), 10) == 1);
+  // The profile check: a missing file source is an error, a camera not plugged in yet is not.
+  CHECK(wait_exit(spawn({kBin, "--images", "/nonexistent-dir", "--check-config"}), 10) == 2);
+  CHECK(wait_exit(spawn({kBin, "--images", empty.string(), "--check-config"}), 10) == 0);
+  CHECK(wait_exit(spawn({kBin, "--device", "/dev/video-none", "--check-config"}), 10) == 0);
   fs::remove_all(empty);
+}
+
+namespace {
+// The camera's newest heartbeat from pid, within seconds; false if none came.
+bool camera_heartbeat(Module& m, std::vector<heartbeat_t>& beats, pid_t pid, heartbeat_t& out, double seconds,
+                      const std::function<bool(const heartbeat_t&)>& want = nullptr) {
+  auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < end) {
+    m.lcm().handleTimeout(20);
+    for (auto it = beats.rbegin(); it != beats.rend(); ++it) {
+      if (it->module != "camera" || it->pid != pid) continue;
+      if (!want || want(*it)) {
+        out = *it;
+        return true;
+      }
+      break;
+    }
+  }
+  return false;
+}
+double value_of(const heartbeat_t& hb, const std::string& name) {
+  for (int i = 0; i < hb.num_values; ++i)
+    if (hb.value_names[i] == name) return hb.values[i];
+  return -1;
+}
+}  // namespace
+
+TEST_CASE("a source absent at start is waited for, said in the heartbeat, and published once it is there") {
+  const fs::path base = temp_dir("absent");
+  const fs::path dir = base / "frames";  // not there yet
+  Module m("test", kUrl);
+  std::vector<image_t> frames;
+  std::vector<heartbeat_t> beats;
+  m.subscribe<image_t>(channel(kImageChannel), [&](const image_t& im) { frames.push_back(im); });
+  m.subscribe<heartbeat_t>(channel(kHeartbeatChannel), [&](const heartbeat_t& hb) { beats.push_back(hb); });
+  pid_t pid = spawn({kBin, "--images", dir.string(), "--fps", "20", "--loop", "--lcm-url", kUrl});
+  heartbeat_t hb{};
+  REQUIRE(camera_heartbeat(m, beats, pid, hb, 5, [](const heartbeat_t& h) { return h.uptime_us > 2'000'000; }));
+  CHECK(hb.status.find("waiting for folder " + dir.string()) == 0);
+  CHECK(value_of(hb, "waiting") == 1);
+  CHECK(frames.empty());
+  CHECK(::waitpid(pid, nullptr, WNOHANG) == 0);  // still running: no crash loop
+
+  fs::create_directories(dir);
+  for (int k = 0; k < 3; ++k) cv::imwrite((dir / ("f" + std::to_string(k) + ".png")).string(), numbered_frame(k));
+  collect(m, frames, 5, 5);
+  REQUIRE(frames.size() >= 5);
+  CHECK(frames[0].frame_number == 0);
+  REQUIRE(camera_heartbeat(m, beats, pid, hb, 3, [](const heartbeat_t& h) { return h.status == "ok"; }));
+  CHECK(value_of(hb, "waiting") == 0);
+  CHECK(stop(pid) == 0);
+  fs::remove_all(base);
+}
+
+TEST_CASE("a folder emptied while running: the camera waits (no crash loop) and resumes, numbering on, when refilled") {
+  const fs::path dir = temp_dir("emptied");
+  for (int k = 0; k < 3; ++k) cv::imwrite((dir / ("f" + std::to_string(k) + ".png")).string(), numbered_frame(k));
+  Module m("test", kUrl);
+  std::vector<image_t> frames;
+  std::vector<heartbeat_t> beats;
+  m.subscribe<image_t>(channel(kImageChannel), [&](const image_t& im) { frames.push_back(im); });
+  m.subscribe<heartbeat_t>(channel(kHeartbeatChannel), [&](const heartbeat_t& hb) { beats.push_back(hb); });
+  pid_t pid = spawn({kBin, "--images", dir.string(), "--fps", "20", "--loop", "--lcm-url", kUrl});
+  collect(m, frames, 6, 10);
+  REQUIRE(frames.size() >= 6);
+
+  for (int k = 0; k < 3; ++k) fs::remove(dir / ("f" + std::to_string(k) + ".png"));
+  heartbeat_t hb{};
+  REQUIRE(camera_heartbeat(m, beats, pid, hb, 5, [](const heartbeat_t& h) { return value_of(h, "waiting") == 1; }));
+  CHECK(hb.status.find("waiting for folder " + dir.string()) == 0);
+  // Waiting, not looping: for 2 s no frame, the same process.
+  frames.clear();
+  collect(m, frames, 1000, 2);
+  CHECK(frames.empty());
+  CHECK(::waitpid(pid, nullptr, WNOHANG) == 0);
+
+  cv::imwrite((dir / "g.png").string(), numbered_frame(4));
+  collect(m, frames, 3, 5);
+  REQUIRE(frames.size() >= 3);
+  CHECK(frames[0].frame_number >= 6);  // numbered on from before the outage
+  cv::Mat bgr = cv::imdecode(frames[0].data, cv::IMREAD_COLOR);
+  REQUIRE_FALSE(bgr.empty());
+  CHECK(std::abs(bgr.at<cv::Vec3b>(60, 80)[1] - (20 + 40 * 4)) <= 6);
+  REQUIRE(camera_heartbeat(m, beats, pid, hb, 3, [](const heartbeat_t& h) { return value_of(h, "reopens") >= 1; }));
+  CHECK(hb.status == "ok");
+  CHECK(stop(pid) == 0);
+  fs::remove_all(dir);
 }
 
 TEST_CASE("the folder source skips unreadable images and lists only image files") {

@@ -52,17 +52,22 @@ class VideoSource final : public FrameSource {
   }
   bool next(cv::Mat& frame) override {
     if (cap_.read(frame) && !frame.empty()) return true;
-    if (!loop_) return false;
+    if (!loop_) {
+      finished_ = true;
+      return false;
+    }
     cap_.set(cv::CAP_PROP_POS_FRAMES, 0);
     return cap_.read(frame) && !frame.empty();
   }
   double rate() const override { return fps_; }
   bool live() const override { return false; }
+  bool finished() const override { return finished_; }
   std::string describe() const override { return "video " + path_; }
 
  private:
   std::string path_;
   bool loop_;
+  bool finished_ = false;
   cv::VideoCapture cap_;
   double fps_ = 30.0;
 };
@@ -77,7 +82,10 @@ class FolderSource final : public FrameSource {
     // Skip unreadable files, but give up after one pass without a readable image.
     for (size_t tries = 0; tries < files_.size(); ++tries) {
       if (index_ >= files_.size()) {
-        if (!loop_) return false;
+        if (!loop_) {
+          finished_ = true;
+          return false;
+        }
         index_ = 0;
       }
       const fs::path& file = files_[index_++];
@@ -92,8 +100,10 @@ class FolderSource final : public FrameSource {
   bool live() const override { return false; }
   std::string describe() const override { return "folder " + dir_ + " (" + std::to_string(files_.size()) + " images)"; }
   int64_t unreadable() const override { return unreadable_; }
+  bool finished() const override { return finished_; }
 
  private:
+  bool finished_ = false;
   std::string dir_;
   std::vector<fs::path> files_;
   double fps_;

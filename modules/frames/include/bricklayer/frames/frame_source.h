@@ -15,8 +15,12 @@ namespace bricklayer::frames {
 class FrameSource {
  public:
   virtual ~FrameSource() = default;
-  // The next frame (BGR); false when the source is exhausted or has failed.
+  // The next frame (BGR); false when the source is exhausted or has failed (finished() tells which).
   virtual bool next(cv::Mat& frame) = 0;
+  // True once a file source without loop has delivered its last frame: its end, not a failure. After a
+  // false next() that is not the end (a camera unplugged, a folder emptied), the source is gone and a
+  // publisher opens it again when it is back.
+  virtual bool finished() const { return false; }
   // Frames per second the source delivers on its own (a camera) or should be paced at (files), > 0.
   virtual double rate() const = 0;
   // True for a live camera: it paces itself, so the publisher must not sleep between frames.
