@@ -7,57 +7,26 @@
 
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
+
+#include "bricklayer/host_state_t.hpp"
+#include "bricklayer/launcher/supervisor.h"
 
 #include "bricklayer/launcher/process.h"
 #include "bricklayer/prediction/sample_stacks.h"
 #include "bricklayer/prediction_t.hpp"
 #include "bricklayer/stack_t.hpp"
 #include "../bus/bus_test_util.h"
+#include "launcher_test_util.h"
 
 using namespace bricklayer;
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
+using test::launch;
+using test::TempDir;
 
-namespace {
-
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& tag) {
-    path = fs::temp_directory_path() / ("bricklayer-launcher-" + tag + "-" + std::to_string(::getpid()));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  fs::path write(const std::string& name, const std::string& text) const {
-    std::ofstream(path / name) << text;
-    return path / name;
-  }
-  std::string read(const std::string& name) const {
-    std::ifstream in(path / name);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
-};
-
-launcher::Process launch(const TempDir& dir, const fs::path& profile, std::vector<std::string> extra = {}) {
-  std::vector<std::string> argv = {test::bin("bricklayer-launch"), "--root", dir.path.string(), "--bin-dir",
-                                   std::string(BRICKLAYER_BINARY_DIR) + "/bin", "--lcm-url", test::kTestUrl,
-                                   profile.string()};
-  argv.insert(argv.end(), extra.begin(), extra.end());
-  launcher::SpawnOptions o;
-  o.stdout_path = (dir.path / "launch.out").string();
-  o.stderr_path = (dir.path / "launch.err").string();
-  o.env = {"DISPLAY="};
-  return launcher::Process::spawn(argv, o);
-}
-
-}  // namespace
 
 TEST_CASE("kill -9 of the prediction under the launcher: heartbeat back within 2 s, predictions resume") {
   TempDir dir("kill");
@@ -196,34 +165,119 @@ TEST_CASE("a profile naming a binary that does not exist is a clear error before
   CHECK(dir.read("launch.out").find("starting") == std::string::npos);
 }
 
-TEST_CASE("a module that never sends a heartbeat fails the start, and everything is stopped") {
+TEST_CASE("a module that never sends its heartbeat is killed and retried while the rest run; what is down is said") {
   TempDir dir("silent");
   auto profile = dir.write("p.json", R"({"stop_timeout_s":1,"modules":[
-      {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]},
-      {"name":"mute","command":["/bin/sleep","60"],"heartbeat":"mute","ready_timeout_s":1}]})");
-  auto launcher = launch(dir, profile);
-  auto st = launcher.wait_for(15s);
+      {"name":"mute","command":["/bin/sleep","60"],"heartbeat":"mute","ready_timeout_s":1,"backoff_max_s":0.5},
+      {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]}]})");
+  auto launcher = launch(dir, profile, {"--duration", "5"});
+  auto st = launcher.wait_for(20s);
   REQUIRE(st);
-  CHECK(st->code == 1);
-  std::string err = dir.read("launch.err");
-  INFO(err);
-  CHECK(err.find("mute (pid") != std::string::npos);
-  CHECK(err.find("sent no heartbeat on BL_HEARTBEAT within 1 s") != std::string::npos);
-  CHECK(dir.read("launch.out").find("FAILED to start") != std::string::npos);
-}
-
-TEST_CASE("a module that keeps exiting before it comes up fails the start instead of looping") {
-  TempDir dir("crashloop");
-  auto profile = dir.write("p.json", R"({"modules":[
-      {"name":"broken","command":["/bin/false"],"heartbeat":"broken"}]})");
-  auto launcher = launch(dir, profile);
-  auto st = launcher.wait_for(15s);
-  REQUIRE(st);
-  CHECK(st->code == 1);
   std::string out = dir.read("launch.out");
   INFO(out << dir.read("launch.err"));
-  CHECK(out.find("restart #2") != std::string::npos);
-  CHECK(out.find("broken keeps exiting before it comes up (exit code 1): giving up") != std::string::npos);
+  CHECK(st->code == 1);  // stopped with a module down
+  CHECK(out.find("mute (pid") != std::string::npos);
+  CHECK(out.find("sent no heartbeat on BL_HEARTBEAT within 1.0 s of starting: killing it") != std::string::npos);
+  CHECK(out.find("restart #2") != std::string::npos);       // retried, not given up on
+  CHECK(out.find("prediction up (pid") != std::string::npos);  // the start order went on past it
+  CHECK(out.find("all 2 processes") == std::string::npos);
+  CHECK(out.find("1 of 2 processes of profile p are up; down: mute (") != std::string::npos);
+  CHECK(out.find("down at the stop: mute (") != std::string::npos);
+}
+
+TEST_CASE("a module that keeps exiting before it comes up is retried with a capped backoff, never given up on") {
+  TempDir dir("crashloop");
+  auto profile = dir.write("p.json", R"({"modules":[
+      {"name":"broken","command":["/bin/false"],"heartbeat":"broken","backoff_max_s":0.4},
+      {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]}]})");
+  auto launcher = launch(dir, profile, {"--duration", "5"});
+  test::Listener bus;
+  REQUIRE(bus.ok());
+  bus.listen(channel(launcher::kHostStateChannel));
+  bus.listen(channel(kHeartbeatChannel));
+  heartbeat_t hb{};
+  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", hb); }, 10s));
+  bus.pump_until([&] { return !launcher.running(); }, 10s);  // listening to the host state meanwhile
+  auto st = launcher.wait_for(20s);
+  REQUIRE(st);
+  std::string out = dir.read("launch.out");
+  INFO(out << dir.read("launch.err"));
+  CHECK(st->code == 1);
+  CHECK(out.find("giving up") == std::string::npos);
+  // 0.1, 0.2, 0.4, 0.4, ... s: at least 8 restarts in 5 s; without the cap (0.8, 1.6, 3.2) at most 5.
+  std::smatch m;
+  REQUIRE(std::regex_search(out, m, std::regex(R"(\n  broken +(\d+) )")));
+  CHECK(std::stoi(m[1]) >= 8);
+  CHECK(out.find("restarting in 0.4 s (5 quick failures in a row)") != std::string::npos);
+  CHECK(out.find("restarting in 0.8 s") == std::string::npos);
+  CHECK(out.find("1 of 2 processes of profile p are up; down: broken (restarting: exit code 1)") != std::string::npos);
+  // The host state named it down the whole time, and the prediction up with its real pid.
+  host_state_t hs{};
+  bool seen = false;
+  for (const auto& msg : bus.on(channel(launcher::kHostStateChannel))) {
+    host_state_t one{};
+    if (test::decode(msg.bytes, one) && one.num_modules == 2 && one.modules[1].state == module_state_t::STATE_UP) {
+      hs = one;
+      seen = true;
+    }
+  }
+  REQUIRE(seen);
+  CHECK(hs.profile == "p");
+  CHECK(hs.modules_up == 1);
+  CHECK(hs.status.rfind("down: broken (", 0) == 0);
+  CHECK(hs.modules[0].name == "broken");
+  CHECK((hs.modules[0].state == module_state_t::STATE_RESTARTING || hs.modules[0].state == module_state_t::STATE_STARTING));
+  CHECK(hs.modules[0].last_exit == "exit code 1");
+  CHECK(hs.modules[1].pid == hb.pid);
+}
+
+TEST_CASE("the summary and the host state add up a module's counters across its restarts") {
+  TempDir dir("sum");
+  auto profile = dir.write("p.json", R"({"modules":[
+      {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]}]})");
+  auto launcher = launch(dir, profile);
+  test::Listener bus;
+  REQUIRE(bus.ok());
+  bus.listen(channel(kHeartbeatChannel));
+  bus.listen(channel(launcher::kHostStateChannel));
+  heartbeat_t hb{};
+  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", hb); }, 10s));
+  int64_t frame = 0;
+  // Sends n stacks, then waits until the prediction's own heartbeat counts them all.
+  auto send = [&](int n, pid_t pid) {
+    for (int i = 0; i < n; ++i) {
+      ++frame;
+      bricklayer::stack_t s = prediction::sample_stack(5, static_cast<uint32_t>(frame), frame, frame);
+      REQUIRE(bus.lcm().publish(channel(kStackChannel), &s) == 0);
+      bus.pump(5ms);
+    }
+    heartbeat_t now{};
+    return bus.pump_until([&] { return bus.last_heartbeat("prediction", now) && now.pid == pid && now.received == n; }, 5s);
+  };
+  REQUIRE(send(40, hb.pid));
+  const pid_t first = hb.pid;
+  REQUIRE(::kill(first, SIGKILL) == 0);
+  heartbeat_t back{};
+  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", back) && back.pid != first; }, 8s));
+  REQUIRE(send(25, back.pid));
+  // The host state: 65 received by the module, though its current process says 25.
+  bus.messages.clear();
+  host_state_t hs{};
+  REQUIRE(bus.pump_until([&] {
+    for (const auto& m : bus.on(channel(launcher::kHostStateChannel)))
+      if (test::decode(m.bytes, hs) && hs.num_modules == 1 && hs.modules[0].received == 65) return true;
+    return false;
+  }, 5s));
+  CHECK(hs.modules[0].restarts == 1);
+  CHECK(hs.modules[0].pid == back.pid);
+  launcher.signal(SIGTERM);
+  REQUIRE(launcher.wait_for(15s));
+  std::string out = dir.read("launch.out");
+  INFO(out);
+  std::smatch m;
+  REQUIRE(std::regex_search(out, m, std::regex(R"(\n  prediction +(\d+) +(\d+) +(\d+))")));
+  CHECK(m[1] == "1");
+  CHECK(m[2] == "65");
 }
 
 TEST_CASE("a run with a duration stops by itself (SIGTERM, deadline, SIGKILL) and the logger records it") {

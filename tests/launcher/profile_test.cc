@@ -146,6 +146,80 @@ TEST_CASE("bricklayer-launch --check prints the plan, or names every missing bin
   fs::remove_all(dir);
 }
 
+TEST_CASE("bricklayer-launch --check checks every file the modules will read") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("bricklayer-launch-files-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "launch" / "scenarios");
+  std::ofstream(dir / "launch" / "scenarios" / "here.json") << "{}";
+  auto run = [&](const std::string& profile_json) {
+    std::ofstream(dir / "p.json") << profile_json;
+    SpawnOptions o;
+    o.stdout_path = (dir / "out").string();
+    o.merge_stderr = true;
+    o.env = {"DISPLAY="};
+    auto p = Process::spawn({std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-launch", "--check", "--root",
+                             dir.string(), "--bin-dir", std::string(BRICKLAYER_BINARY_DIR) + "/bin", (dir / "p.json").string()},
+                            o);
+    auto st = p.wait_for(std::chrono::seconds(60));
+    REQUIRE(st);
+    std::ifstream in(dir / "out");
+    std::stringstream text;
+    text << in.rdbuf();
+    return std::make_pair(st->code, text.str());
+  };
+  // Everything there: a runtime node checks itself (--check-config), a program without that its
+  // input-file flags (/bin/echo stands for one), the profile's needs.
+  auto [ok_code, ok_out] = run(R"({"modules":[
+      {"name":"prediction","command":["bricklayer-prediction"]},
+      {"name":"sim","command":["/bin/echo","--scenario","launch/scenarios/here.json"],"heartbeat":"",
+       "needs":["launch/scenarios/here.json"]},
+      {"name":"camera","command":["bricklayer-camera","--device","0"]}]})");
+  INFO(ok_out);
+  CHECK(ok_code == 0);
+  CHECK(ok_out.find("prediction: flags and files checked by bricklayer-prediction --check-config") != std::string::npos);
+  CHECK(ok_out.find("sim: 1 input file of its command line checked (echo has no --check-config)") != std::string::npos);
+  CHECK(ok_out.find("camera: flags and files checked by bricklayer-camera --check-config") != std::string::npos);
+
+  // Each missing file is named with its module; the check fails.
+  auto [bad_code, bad_out] = run(R"({"modules":[
+      {"name":"sim","command":["/bin/echo","--scenario","launch/scenarios/gone.json","--font=fonts/none.ttf"],"heartbeat":""},
+      {"name":"projection","command":["/bin/echo"],"heartbeat":"","needs":["calibration.json"]},
+      {"name":"camera","command":["bricklayer-camera","--images","frames-gone"]}]})");
+  INFO(bad_out);
+  CHECK(bad_code == 2);
+  CHECK(bad_out.find("module 'sim': --scenario launch/scenarios/gone.json: no such file") != std::string::npos);
+  CHECK(bad_out.find("module 'sim': --font fonts/none.ttf: no such file") != std::string::npos);
+  CHECK(bad_out.find("module 'projection' needs 'calibration.json' (the profile's needs), which does not exist") !=
+        std::string::npos);
+  CHECK(bad_out.find("module 'camera': its own check failed (exit code 2)") != std::string::npos);
+  CHECK(bad_out.find("folder frames-gone: no such file or folder") != std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("every shipped profile passes --check in the source tree") {
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(BRICKLAYER_SOURCE_DIR) + "/launch/profiles")) {
+    if (entry.path().extension() != ".json") continue;
+    SpawnOptions o;
+    const std::string out = std::filesystem::temp_directory_path() / ("bricklayer-shipped-check-" + std::to_string(::getpid()));
+    o.stdout_path = out;
+    o.merge_stderr = true;
+    o.env = {"DISPLAY="};
+    auto p = Process::spawn({std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-launch", "--check", "--root",
+                             BRICKLAYER_SOURCE_DIR, "--bin-dir", std::string(BRICKLAYER_BINARY_DIR) + "/bin",
+                             entry.path().string()},
+                            o);
+    auto st = p.wait_for(std::chrono::seconds(60));
+    REQUIRE(st);
+    std::ifstream in(out);
+    std::stringstream text;
+    text << in.rdbuf();
+    INFO(entry.path().filename().string() << ":\n" << text.str());
+    CHECK(st->code == 0);
+    std::filesystem::remove(out);
+  }
+}
+
 TEST_CASE("the logger spec: a disk budget, a frame policy, and the command line they become") {
   const Profile p = parse_profile(R"({"modules":[],"logger":{"file":"logs/exhibit-%Y%m%d","split_mb":100,
       "budget_mb":5000,"min_free_mb":1000,"frames":{"rate":2,"before_s":8}}})", "t");

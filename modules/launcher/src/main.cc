@@ -13,6 +13,7 @@
 #include "bricklayer/common/lcm_url.h"
 #include "bricklayer/common/log.h"
 #include "bricklayer/launcher/profile.h"
+#include "bricklayer/launcher/profile_check.h"
 #include "bricklayer/launcher/supervisor.h"
 
 namespace {
@@ -38,7 +39,12 @@ int Main(int argc, char** argv) {
   flags.add("duration", "", "stop by itself after this many seconds (default: the profile's; 0 = until Ctrl-C)");
   flags.add("lcm-url", "", "LCM URL for every module (default: LCM_DEFAULT_URL, else host-only ttl=0)");
   flags.add("log-level", "info", "debug, info, warn or error");
-  flags.add_bool("check", "only check the profile: print what would be started, exit 2 if a binary is missing");
+  flags.add("host-name", "", "this host's name in the host state on BL_HOST_STATE (default: the machine's name)");
+  flags.add("multicast-route", "",
+            "interface (lo, eth0) whose multicast route 224.0.0.0/4 the launcher puts back while its bus hears nothing "
+            "(an interface that went down and up loses it); needs CAP_NET_ADMIN. Default: leave routes alone");
+  flags.add_bool("check", "only check the profile: print what would be started and check every file its modules will "
+                          "read; exit 2 if a binary or a file is missing");
   if (!flags.parse(argc, argv)) return 0;
   log::set_level(log::parse_level(flags.get("log-level")));
 
@@ -70,6 +76,8 @@ int Main(int argc, char** argv) {
   options.root = root.string();
   options.bin_dirs = {fs::absolute(bin).string()};
   options.lcm_url = resolve_lcm_url(flags.get("lcm-url"));
+  options.host_name = flags.get("host-name");
+  options.multicast_route_dev = flags.get("multicast-route");
   try {
     check_lcm_url(options.lcm_url);
   } catch (const std::invalid_argument& e) {
@@ -100,6 +108,14 @@ int Main(int argc, char** argv) {
         std::cout << options.duration_s << " s\n";
       else
         std::cout << "until Ctrl-C\n";
+      const launcher::FileCheckReport files = launcher::check_module_files(plan, options);
+      std::cout << "files:\n";
+      for (const auto& note : files.notes) std::cout << "  " << note << "\n";
+      if (!files.problems.empty()) {
+        std::string msg = "profile " + profile.name + " cannot run as it is:";
+        for (const auto& p : files.problems) msg += "\n  " + p;
+        throw launcher::ProfileError(msg);
+      }
     } catch (const launcher::ProfileError& e) {
       throw FlagError(e.what());
     }

@@ -46,7 +46,7 @@ std::vector<std::string> strings(const json& v, const std::string& where) {
 
 ModuleSpec parse_module(const json& m, const std::string& where) {
   check_keys(m, {"name", "command", "command_with_display", "heartbeat", "restart", "ready_timeout_s",
-                 "heartbeat_timeout_s", "env"},
+                 "heartbeat_timeout_s", "backoff_max_s", "needs", "env"},
              where);
   ModuleSpec spec;
   if (!m.contains("name") || !m.at("name").is_string() || m.at("name").get<std::string>().empty())
@@ -76,6 +76,8 @@ ModuleSpec parse_module(const json& m, const std::string& where) {
   }
   spec.ready_timeout_s = number(m, "ready_timeout_s", spec.ready_timeout_s, w, 0.1);
   spec.heartbeat_timeout_s = number(m, "heartbeat_timeout_s", spec.heartbeat_timeout_s, w, 1.5);
+  spec.backoff_max_s = number(m, "backoff_max_s", spec.backoff_max_s, w, 0.1);
+  if (m.contains("needs")) spec.needs = strings(m.at("needs"), w + " needs");
   if (m.contains("env")) {
     spec.env = strings(m.at("env"), w + " env");
     for (const auto& e : spec.env)

@@ -13,6 +13,8 @@
 
 #include "bricklayer/common/channels.h"
 #include "bricklayer/common/log.h"
+#include "bricklayer/runtime/lcm_bus.h"
+#include "bricklayer/runtime/node.h"
 
 namespace bricklayer::launcher {
 namespace {
@@ -33,6 +35,12 @@ std::string strftime_now(const std::string& pattern) {
   size_t n = std::strftime(buf, sizeof(buf), pattern.c_str(), &tm);
   return n ? std::string(buf, n) : pattern;
 }
+
+std::chrono::microseconds seconds(double s) { return std::chrono::microseconds(static_cast<int64_t>(s * 1e6)); }
+
+// The launcher's own heartbeat is heard back within a second on a working bus; after this long without
+// it the bus is deaf (an interface down, no route), and no module is judged by its silence.
+constexpr auto kDeafAfter = std::chrono::milliseconds(2500);
 
 }  // namespace
 
@@ -82,6 +90,27 @@ LaunchPlan plan_launch(const Profile& profile, const SupervisorOptions& options)
   return plan;
 }
 
+// The launcher on the bus: a runtime node (so its bus heals like every module's), with the supervisor's
+// work in tick() and the host state published with each heartbeat.
+class Supervisor::SupervisorNode final : public runtime::Node {
+ public:
+  SupervisorNode(Supervisor& owner, runtime::Bus& bus) : Node("launcher", bus), owner_(owner) {
+    // Every module's heartbeat matters: a generous queue, not newest-wins.
+    subscribe<heartbeat_t>(channel(kHeartbeatChannel), runtime::QueuePolicy::keep(4096),
+                           [this](const heartbeat_t& hb) { owner_.HandleHeartbeat(hb); });
+    set_tick_ms(20);
+  }
+  using Node::publish_report;
+  using Node::set_status;
+  using Node::set_value;
+  using Node::warn;
+
+ private:
+  void tick() override { owner_.tick(); }
+  void before_heartbeat() override { owner_.before_heartbeat(); }
+  Supervisor& owner_;
+};
+
 Supervisor::Supervisor(Profile profile, SupervisorOptions options)
     : profile_(std::move(profile)), options_(std::move(options)) {
   LaunchPlan plan = plan_launch(profile_, options_);
@@ -100,11 +129,15 @@ Supervisor::Supervisor(Profile profile, SupervisorOptions options)
   char host[256] = {0};
   gethostname(host, sizeof(host) - 1);
   host_ = host;
-  module_ = std::make_unique<Module>("launcher", options_.lcm_url);
-  module_->subscribe<heartbeat_t>(channel(kHeartbeatChannel), [this](const heartbeat_t& hb) { HandleHeartbeat(hb); });
+  host_label_ = options_.host_name.empty() ? host_ : options_.host_name;
+  bus_ = std::make_unique<runtime::LcmBus>(options_.lcm_url, runtime::LcmBusOptions{channel(kHeartbeatChannel)});
+  node_ = std::make_unique<SupervisorNode>(*this, *bus_);
 }
 
-Supervisor::~Supervisor() { shutdown(); }
+Supervisor::~Supervisor() {
+  shutting_down_ = true;
+  shutdown();
+}
 
 void Supervisor::say(const std::string& line) const {
   std::cout << "[bricklayer " << format_seconds(since_start(Clock::now())) << "s] " << line << std::endl;
@@ -115,8 +148,17 @@ double Supervisor::since_start(Clock::time_point t) const { return std::chrono::
 bool Supervisor::ready(const Managed& m) const {
   if (m.state == State::kUp) return true;
   if (m.state == State::kExited) return true;  // a one-shot that finished as its policy allows
-  return m.spec.heartbeat.empty() && m.proc.started() && m.state != State::kPending;
+  return m.spec.heartbeat.empty() && m.proc.started() && (m.state == State::kStarting);
 }
+
+// The start order moves past a module once it is up, or once it has failed to come up: the rest of
+// the exhibit runs while it is retried.
+bool Supervisor::settled(const Managed& m) const {
+  return ready(m) || m.start_failed || m.state == State::kFailed ||
+         (m.spec.heartbeat.empty() && m.state != State::kPending);
+}
+
+bool Supervisor::bus_heard(Clock::time_point now) const { return now - last_self_heard_ < kDeafAfter; }
 
 void Supervisor::start(Managed& m) {
   SpawnOptions opts;
@@ -127,7 +169,9 @@ void Supervisor::start(Managed& m) {
   try {
     m.proc = Process::spawn(m.argv, opts);
   } catch (const std::exception& e) {
-    log::error("cannot start ", m.spec.name, ": ", e.what());
+    m.last_exit = std::string("cannot start: ") + e.what();
+    say(m.spec.name + " " + m.last_exit + "; retrying in 1.0 s");
+    m.start_failed = true;
     m.state = State::kWaitingRestart;
     m.restart_at = Clock::now() + std::chrono::seconds(1);
     return;
@@ -142,18 +186,23 @@ void Supervisor::start(Managed& m) {
 }
 
 void Supervisor::HandleHeartbeat(const heartbeat_t& hb) {
+  const auto now = Clock::now();
+  if (hb.module == "launcher" && hb.pid == static_cast<int32_t>(::getpid()) && hb.instance == host_ + ":" + std::to_string(hb.pid)) {
+    last_self_heard_ = now;
+    return;
+  }
   for (auto& m : managed_) {
     if (m.spec.heartbeat.empty() || m.spec.heartbeat != hb.module || !m.proc.started() || m.proc.pid() != hb.pid)
       continue;
     if (m.state != State::kStarting && m.state != State::kUp) continue;
     // Another host's module with the same name and, by chance, the same pid is not ours.
     if (!hb.instance.empty() && hb.instance != host_ + ":" + std::to_string(hb.pid)) continue;
-    auto now = Clock::now();
     m.last_beat = now;
     m.last = hb;
     m.has_beat = true;
     if (m.state == State::kStarting) {
       m.state = State::kUp;
+      m.start_failed = false;
       say(m.spec.name + " up (pid " + std::to_string(hb.pid) + ", first heartbeat " +
           format_seconds(std::chrono::duration<double>(now - m.started).count()) + " s after start" +
           (m.restarts ? ", restarts " + std::to_string(hb.restarts) : "") + ")");
@@ -161,42 +210,45 @@ void Supervisor::HandleHeartbeat(const heartbeat_t& hb) {
   }
 }
 
+void Supervisor::ended(Managed& m, Clock::time_point now) {
+  // The counters of the process that ended stay in the module's totals.
+  if (m.has_beat) {
+    m.before.received += m.last.received;
+    m.before.published += m.last.published;
+    m.before.dropped += m.last.dropped;
+    m.before.errors += m.last.errors;
+  }
+  const bool came_up = m.has_beat || (m.spec.heartbeat.empty() && m.state == State::kUp);
+  m.has_beat = false;
+  m.last = heartbeat_t{};
+  ExitStatus st = m.proc.exit_status().value_or(ExitStatus{});
+  m.last_exit = st.describe();
+  bool up_long = m.state == State::kUp && now - m.started > std::chrono::seconds(10);
+  bool restart = m.spec.restart == RestartPolicy::kAlways || (m.spec.restart == RestartPolicy::kOnFailure && !st.clean());
+  if (!came_up && !m.spec.heartbeat.empty()) m.start_failed = true;
+  if (!restart) {
+    m.state = st.clean() ? State::kExited : State::kFailed;
+    say(m.spec.name + " (pid " + std::to_string(m.proc.pid()) + ") ended: " + m.last_exit + "; restart policy " +
+        to_string(m.spec.restart) + ", not restarting" + (st.clean() ? "" : ": it stays down"));
+    return;
+  }
+  m.quick_failures = up_long ? 0 : m.quick_failures + 1;
+  // Capped backoff, never giving up: an exhibit's camera may be plugged in an hour later.
+  double delay = std::min(m.spec.backoff_max_s, 0.1 * std::pow(2.0, std::min(20, std::max(0, m.quick_failures - 1))));
+  say(m.spec.name + " (pid " + std::to_string(m.proc.pid()) + ") " + (came_up ? "died" : "died before it came up") +
+      ": " + m.last_exit + "; restarting in " + format_seconds(delay) + " s" +
+      (m.quick_failures > 1 ? " (" + std::to_string(m.quick_failures) + " quick failures in a row)" : ""));
+  m.state = State::kWaitingRestart;
+  m.restart_at = now + seconds(delay);
+}
+
 void Supervisor::tick() {
+  if (shutting_down_) return;
   auto now = Clock::now();
   // 1. Reap: a dead module is restarted by its policy, after a backoff when it keeps dying quickly.
   for (auto& m : managed_) {
     if ((m.state != State::kStarting && m.state != State::kUp) || m.proc.running()) continue;
-    ExitStatus st = m.proc.exit_status().value_or(ExitStatus{});
-    m.last_exit = st.describe();
-    bool up_long = m.state == State::kUp && now - m.started > std::chrono::seconds(10);
-    bool restart = m.spec.restart == RestartPolicy::kAlways || (m.spec.restart == RestartPolicy::kOnFailure && !st.clean());
-    if (!restart) {
-      say(m.spec.name + " (pid " + std::to_string(m.proc.pid()) + ") ended: " + m.last_exit + "; restart policy " +
-          to_string(m.spec.restart) + ", not restarting");
-      m.state = State::kExited;
-      if (!st.clean() && !all_up_announced_) {
-        log::error(m.spec.name, " failed while the profile was starting (", m.last_exit, ")");
-        fatal_ = true;
-        Module::request_stop();
-      }
-      continue;
-    }
-    m.quick_failures = up_long ? 0 : m.quick_failures + 1;
-    if (!all_up_announced_ && !m.has_beat && m.quick_failures >= 3) {
-      log::error(m.spec.name, " exited ", m.quick_failures, " times before its first heartbeat (last: ", m.last_exit,
-                 "); see its output above. Stopping.");
-      say(m.spec.name + " keeps exiting before it comes up (" + m.last_exit + "): giving up");
-      fatal_ = true;
-      Module::request_stop();
-      m.state = State::kExited;
-      continue;
-    }
-    double delay = std::min(5.0, 0.1 * std::pow(2.0, std::max(0, m.quick_failures - 1)));
-    log::warn(m.spec.name, " (pid ", m.proc.pid(), ") died: ", m.last_exit, "; restarting in ", format_seconds(delay), " s");
-    say(m.spec.name + " (pid " + std::to_string(m.proc.pid()) + ") died: " + m.last_exit + "; restarting in " +
-        format_seconds(delay) + " s");
-    m.state = State::kWaitingRestart;
-    m.restart_at = now + std::chrono::microseconds(static_cast<int64_t>(delay * 1e6));
+    ended(m, now);
   }
   // 2. Restarts that are due.
   for (auto& m : managed_) {
@@ -205,63 +257,210 @@ void Supervisor::tick() {
       start(m);
     }
   }
-  // 3. Readiness and liveness deadlines.
+  // 3. Readiness and liveness deadlines, only while the bus carries the launcher's own heartbeat: on a
+  //    deaf bus every module is silent, and killing them would only turn a network fault into restarts.
+  const bool heard = bus_heard(now);
+  if (!heard) {
+    if (!bus_was_deaf_ && now - t0_ > kDeafAfter)
+      say("the launcher hears nothing on the bus (not even itself): no module is judged by its silence until it does" +
+          (bus_->problem().empty() ? std::string() : " (" + bus_->problem() + ")"));
+    bus_was_deaf_ = bus_was_deaf_ || now - t0_ > kDeafAfter;
+    repair_route(now);
+  } else if (bus_was_deaf_) {
+    bus_was_deaf_ = false;
+    say("the bus carries the launcher's heartbeat again: watching the modules' heartbeats from now");
+    for (auto& m : managed_) {
+      if (m.state == State::kUp) m.last_beat = now;
+      if (m.state == State::kStarting) m.started = now;
+    }
+  }
   for (auto& m : managed_) {
-    if (m.state == State::kStarting &&
-        now - m.started > std::chrono::microseconds(static_cast<int64_t>(m.spec.ready_timeout_s * 1e6))) {
-      if (!all_up_announced_) {
-        log::error(m.spec.name, " (pid ", m.proc.pid(), ") sent no heartbeat on ", channel(kHeartbeatChannel),
-                   " within ", m.spec.ready_timeout_s, " s of starting; see its output above. Stopping.");
-        fatal_ = true;
-        Module::request_stop();
-        return;
-      }
-      log::warn(m.spec.name, " sent no heartbeat within ", m.spec.ready_timeout_s, " s; killing it");
+    if (!heard) break;
+    if (m.state == State::kStarting && !m.spec.heartbeat.empty() && now - m.started > seconds(m.spec.ready_timeout_s)) {
+      say(m.spec.name + " (pid " + std::to_string(m.proc.pid()) + ") sent no heartbeat on " + channel(kHeartbeatChannel) +
+          " within " + format_seconds(m.spec.ready_timeout_s) + " s of starting: killing it (see its output above)");
+      m.start_failed = true;
       m.proc.signal(SIGKILL);
-    } else if (m.state == State::kUp && m.has_beat &&
-               now - m.last_beat > std::chrono::microseconds(static_cast<int64_t>(m.spec.heartbeat_timeout_s * 1e6))) {
+      m.started = now;  // one kill per timeout; the reap restarts it
+    } else if (m.state == State::kUp && m.has_beat && now - m.last_beat > seconds(m.spec.heartbeat_timeout_s)) {
       log::warn(m.spec.name, " (pid ", m.proc.pid(), ") silent for ", m.spec.heartbeat_timeout_s, " s; killing it");
       say(m.spec.name + " silent for " + format_seconds(m.spec.heartbeat_timeout_s) + " s: killing it");
       m.proc.signal(SIGKILL);
+      m.last_beat = now;
     }
   }
-  // 4. Start in order: the next module only once everything before it is up.
-  while (next_to_start_ < managed_.size() &&
-         (next_to_start_ == 0 || ready(managed_[next_to_start_ - 1]))) {
+  // 4. Start in order: the next module once everything before it is up, or has failed to come up.
+  while (next_to_start_ < managed_.size() && (next_to_start_ == 0 || settled(managed_[next_to_start_ - 1]))) {
     start(managed_[next_to_start_]);
     ++next_to_start_;
   }
-  // 5. Everything up: say where to look.
-  if (!all_up_announced_ && next_to_start_ == managed_.size() &&
-      std::all_of(managed_.begin(), managed_.end(), [this](const Managed& m) { return ready(m); })) {
-    all_up_announced_ = true;
-    say("all " + std::to_string(managed_.size()) + " processes of profile " + profile_.name + " are up");
-    for (const auto& note : profile_.notes) say("  " + note);
-    if (!log_file_.empty()) say("  bus log: " + log_file_ + " (replay: bricklayer-replay LOG --check)");
-    say(options_.duration_s > 0 ? "  stopping by itself after " + format_seconds(options_.duration_s) + " s (Ctrl-C stops earlier)"
-                                : "  stop with Ctrl-C");
+  // 5. Everything up: say where to look. Anything down: say exactly what, each time that changes.
+  if (next_to_start_ == managed_.size()) {
+    const std::string down = down_summary();
+    const bool all_started_once = std::all_of(managed_.begin(), managed_.end(), [this](const Managed& m) { return settled(m); });
+    if (down.empty() && !all_up_announced_) {
+      all_up_announced_ = true;
+      announced_down_.clear();
+      say("all " + std::to_string(managed_.size()) + " processes of profile " + profile_.name + " are up");
+      for (const auto& note : profile_.notes) say("  " + note);
+      if (!log_file_.empty()) say("  bus log: " + log_file_ + " (replay: bricklayer-replay LOG --check)");
+      say(options_.duration_s > 0 ? "  stopping by itself after " + format_seconds(options_.duration_s) + " s (Ctrl-C stops earlier)"
+                                  : "  stop with Ctrl-C");
+    } else if (down.empty() && !announced_down_.empty()) {
+      announced_down_.clear();
+      say("all " + std::to_string(managed_.size()) + " processes of profile " + profile_.name + " are up again");
+    } else if (!down.empty() && down != announced_down_ && all_started_once) {
+      announced_down_ = down;
+      say(std::to_string(host_state().modules_up) + " of " + std::to_string(managed_.size()) + " processes of profile " + profile_.name + " are up; down: " + down);
+    }
   }
   // 6. Duration.
   if (options_.duration_s > 0 && since_start(now) >= options_.duration_s) {
     say("duration of " + format_seconds(options_.duration_s) + " s reached; stopping");
-    Module::request_stop();
+    runtime::Node::request_stop();
   }
-  module_->set_value("modules_up", static_cast<double>(std::count_if(
-                                       managed_.begin(), managed_.end(), [](const Managed& m) { return m.state == State::kUp; })));
+}
+
+// "camera (restarting: exit code 1), vision (starting)": the modules not up, in start order; "" when
+// none. Words only (no counts or times), so the line changes when what is down changes.
+std::string Supervisor::down_summary() const {
+  std::string out;
+  for (const auto& m : managed_) {
+    std::string what;
+    switch (m.state) {
+      case State::kUp:
+      case State::kExited:
+      case State::kStopped: continue;
+      case State::kPending: what = "waiting to start"; break;
+      case State::kStarting:
+        if (ready(m)) continue;
+        what = m.start_failed ? "restarting: " + m.last_exit : "starting";
+        break;
+      case State::kWaitingRestart: what = "restarting: " + m.last_exit; break;
+      case State::kFailed: what = "failed: " + m.last_exit; break;
+    }
+    out += (out.empty() ? "" : ", ") + m.spec.name + " (" + what + ")";
+  }
+  return out;
+}
+
+void Supervisor::repair_route(Clock::time_point now) {
+  if (options_.multicast_route_dev.empty() || now < next_route_repair_) return;
+  next_route_repair_ = now + std::chrono::seconds(2);
+  const std::string ip = find_program("ip", "", {"/usr/sbin", "/sbin", "/usr/bin", "/bin"});
+  if (ip.empty()) {
+    node_->warn("multicast route", "cannot put the multicast route back: no 'ip' program");
+    return;
+  }
+  Process p = Process::spawn({ip, "route", "replace", "224.0.0.0/4", "dev", options_.multicast_route_dev},
+                             SpawnOptions{"", {}, "/dev/null", "/dev/null", false});
+  auto st = p.wait_for(std::chrono::seconds(2));
+  if (st && st->clean()) {
+    say("put the multicast route back: ip route replace 224.0.0.0/4 dev " + options_.multicast_route_dev);
+  } else {
+    // Usually the interface is still down; the warning says it once per 10 s with a count.
+    node_->warn("multicast route", "ip route replace 224.0.0.0/4 dev " + options_.multicast_route_dev + " failed (" +
+                                       (st ? st->describe() : std::string("timed out")) +
+                                       "; interface still down, or no CAP_NET_ADMIN); trying again");
+  }
+}
+
+Supervisor::Totals Supervisor::totals(const Managed& m) const {
+  Totals t = m.before;
+  if (m.has_beat) {
+    t.received += m.last.received;
+    t.published += m.last.published;
+    t.dropped += m.last.dropped;
+    t.errors += m.last.errors;
+  }
+  return t;
+}
+
+std::string Supervisor::status_of(const Managed& m, Clock::time_point now) const {
+  auto ago = [&](Clock::time_point t) { return format_seconds(std::chrono::duration<double>(now - t).count()); };
+  switch (m.state) {
+    case State::kPending: return "waiting for the modules before it to come up";
+    case State::kStarting:
+      if (m.spec.heartbeat.empty()) return "running (no heartbeat)";
+      return "started " + ago(m.started) + " s ago, no heartbeat yet";
+    case State::kUp: return m.has_beat ? m.last.status : "running (no heartbeat)";
+    case State::kWaitingRestart:
+      return "restarting in " + format_seconds(std::max(0.0, std::chrono::duration<double>(m.restart_at - now).count())) +
+             " s after " + m.last_exit;
+    case State::kFailed: return "down for good (restart policy " + to_string(m.spec.restart) + "): " + m.last_exit;
+    case State::kExited: return "finished: " + m.last_exit;
+    case State::kStopped: return "stopped: " + m.last_exit;
+  }
+  return "?";
+}
+
+host_state_t Supervisor::host_state() const {
+  const auto now = Clock::now();
+  host_state_t hs{};
+  hs.utime = bus_->now_utime();
+  hs.host = host_label_;
+  hs.launcher_pid = static_cast<int32_t>(::getpid());
+  hs.profile = profile_.name;
+  hs.uptime_us = std::chrono::duration_cast<std::chrono::microseconds>(now - t0_).count();
+  for (const auto& m : managed_) {
+    module_state_t s{};
+    s.name = m.spec.name;
+    switch (m.state) {
+      case State::kPending: s.state = module_state_t::STATE_WAITING; break;
+      case State::kStarting: s.state = ready(m) ? module_state_t::STATE_UP : module_state_t::STATE_STARTING; break;
+      case State::kUp: s.state = module_state_t::STATE_UP; break;
+      case State::kWaitingRestart: s.state = module_state_t::STATE_RESTARTING; break;
+      case State::kFailed: s.state = module_state_t::STATE_FAILED; break;
+      case State::kExited: s.state = module_state_t::STATE_EXITED; break;
+      case State::kStopped: s.state = module_state_t::STATE_STOPPED; break;
+    }
+    const bool running = (m.state == State::kStarting || m.state == State::kUp) && m.proc.started();
+    s.pid = running ? m.proc.pid() : 0;
+    s.restarts = m.restarts;
+    s.uptime_us = running ? std::chrono::duration_cast<std::chrono::microseconds>(now - m.started).count() : 0;
+    s.restart_in_us = m.state == State::kWaitingRestart
+                          ? std::max<int64_t>(0, std::chrono::duration_cast<std::chrono::microseconds>(m.restart_at - now).count())
+                          : 0;
+    const Totals t = totals(m);
+    s.received = t.received;
+    s.published = t.published;
+    s.dropped = t.dropped;
+    s.errors = t.errors;
+    s.status = status_of(m, now);
+    s.last_exit = m.last_exit;
+    if (s.state == module_state_t::STATE_UP || s.state == module_state_t::STATE_EXITED) ++hs.modules_up;
+    hs.modules.push_back(std::move(s));
+  }
+  hs.num_modules = static_cast<int32_t>(hs.modules.size());
+  const std::string down = down_summary();
+  hs.status = down.empty() ? "ok" : "down: " + down;
+  return hs;
+}
+
+void Supervisor::before_heartbeat() {
+  const host_state_t hs = host_state();
+  node_->set_value("modules_up", hs.modules_up);
+  node_->set_value("modules_down", hs.num_modules - hs.modules_up);
   int restarts = 0;
   for (const auto& m : managed_) restarts += m.restarts;
-  module_->set_value("restarts_total", restarts);
+  node_->set_value("restarts_total", restarts);
+  node_->set_status(hs.status);
+  node_->publish_report(channel(kHostStateChannel), hs);
 }
 
 int Supervisor::run() {
   t0_ = Clock::now();
+  last_self_heard_ = t0_;  // grace until the first heartbeat has had time to come back
   if (!profile_.description.empty()) say("profile " + profile_.name + ": " + profile_.description);
   say("LCM bus: " + options_.lcm_url);
-  Module::install_signal_handlers();
-  if (!Module::stop_requested()) module_->run([this] { tick(); }, 20);
+  runtime::Node::install_signal_handlers();
+  if (!runtime::Node::stop_requested()) node_->run();
+  shutting_down_ = true;
+  const std::string down = down_summary();
   shutdown();
   print_summary();
-  return fatal_ ? 1 : 0;
+  if (!down.empty()) say("down at the stop: " + down);
+  return down.empty() ? 0 : 1;
 }
 
 void Supervisor::shutdown() {
@@ -280,20 +479,21 @@ void Supervisor::shutdown() {
   auto any_running = [&] {
     return std::any_of(order.begin(), order.end(), [&](Managed* m) { return !is_logger(m) && m->proc.running(); });
   };
-  while (any_running() && Clock::now() < until) module_->lcm().handleTimeout(10);
+  while (any_running() && Clock::now() < until) node_->step(10);
   for (Managed* m : order) {
     if (is_logger(m) || !m->proc.running()) continue;
     say(m->spec.name + " ignored SIGTERM for " + format_seconds(profile_.stop_timeout_s) + " s: SIGKILL");
     m->proc.signal(SIGKILL);
     m->proc.wait_for(std::chrono::seconds(5));
   }
-  for (int i = 0; i < 30 && module_->lcm().handleTimeout(10) > 0; ++i) {
-  }
+  for (int i = 0; i < 30; ++i) node_->step(10);
   for (Managed* m : order) {
     if (is_logger(m)) continue;
     if (auto st = m->proc.exit_status()) m->last_exit = st->describe();
     m->state = State::kStopped;
   }
+  // The modules' final state, for an observer that outlives this launcher.
+  node_->publish_report(channel(kHostStateChannel), host_state());
   // Let the logger write the last heartbeats before it goes.
   for (Managed* m : order) {
     if (!is_logger(m)) continue;
@@ -306,20 +506,25 @@ void Supervisor::shutdown() {
 void Supervisor::print_summary() const {
   std::ostringstream out;
   out << "summary of profile " << profile_.name << " after " << format_seconds(since_start(Clock::now())) << " s"
-      << (fatal_ ? " (FAILED to start)" : "") << ":\n";
-  char line[256];
+      << " (counters of every process of a module, summed across its restarts):\n";
+  char line[512];
   std::snprintf(line, sizeof(line), "  %-12s %8s %10s %10s %8s %8s  %s\n", "module", "restarts", "received",
                 "published", "dropped", "errors", "last status");
   out << line;
   for (const auto& m : managed_) {
-    if (m.has_beat) {
+    const Totals t = totals(m);
+    const bool any = m.has_beat || t.received || t.published || t.dropped || t.errors || m.restarts;
+    const std::string status = m.has_beat ? m.last.status
+                               : m.state == State::kPending ? "never started"
+                               : m.last_exit.empty()        ? "(no heartbeat)"
+                                                            : "(no heartbeat; last: " + m.last_exit + ")";
+    if (any && !m.spec.heartbeat.empty()) {
       std::snprintf(line, sizeof(line), "  %-12s %8d %10lld %10lld %8lld %8lld  %s\n", m.spec.name.c_str(), m.restarts,
-                    static_cast<long long>(m.last.received), static_cast<long long>(m.last.published),
-                    static_cast<long long>(m.last.dropped), static_cast<long long>(m.last.errors),
-                    m.last.status.c_str());
+                    static_cast<long long>(t.received), static_cast<long long>(t.published),
+                    static_cast<long long>(t.dropped), static_cast<long long>(t.errors), status.c_str());
     } else {
       std::snprintf(line, sizeof(line), "  %-12s %8d %10s %10s %8s %8s  %s\n", m.spec.name.c_str(), m.restarts, "-", "-",
-                    "-", "-", m.state == State::kPending ? "never started" : "(no heartbeat)");
+                    "-", "-", status.c_str());
     }
     out << line;
   }

@@ -24,6 +24,8 @@ struct ModuleSpec {
   RestartPolicy restart = RestartPolicy::kAlways;
   double ready_timeout_s = 10.0;             // heartbeat must arrive within this after a start
   double heartbeat_timeout_s = 5.0;          // an up module silent this long is killed and restarted
+  double backoff_max_s = 5.0;                // restarts of a module that keeps failing back off up to this
+  std::vector<std::string> needs;            // files (relative to the root) it reads: checked by --check
   std::vector<std::string> env;              // extra "NAME=value" entries
 };
 

@@ -3,7 +3,15 @@
 // or falls silent (counted, logged, BRICKLAYER_RESTARTS in its environment so its own heartbeat says
 // so), runs bricklayer-logger, and stops everything with SIGTERM and a deadline, then SIGKILL.
 //
-// Subscribes: BL_HEARTBEAT (heartbeat_t). Publishes: BL_HEARTBEAT (its own, module "launcher").
+// It never gives up on a profile: a module that cannot start (exits at once, never sends its first
+// heartbeat) is retried with a backoff capped at its backoff_max_s while the rest of the start order
+// goes on, and the output, the summary and the host state say exactly what is down. A module is judged
+// silent only while the launcher hears its own heartbeat: with the bus itself down (an interface
+// down and up) nothing is killed for a silence nobody could have heard.
+//
+// Subscribes: BL_HEARTBEAT (heartbeat_t).
+// Publishes:  BL_HEARTBEAT (its own, module "launcher"); BL_HOST_STATE (host_state_t, once a second:
+//             every module's state, pid, restarts, uptime, counters summed across restarts, status).
 #pragma once
 
 #include <chrono>
@@ -11,12 +19,19 @@
 #include <string>
 #include <vector>
 
-#include "bricklayer/common/module.h"
 #include "bricklayer/heartbeat_t.hpp"
+#include "bricklayer/host_state_t.hpp"
 #include "bricklayer/launcher/process.h"
 #include "bricklayer/launcher/profile.h"
 
+namespace bricklayer::runtime {
+class LcmBus;
+}
+
 namespace bricklayer::launcher {
+
+// host_state_t's channel (before the deployment's prefix: use channel(kHostStateChannel)).
+inline constexpr const char* kHostStateChannel = "BL_HOST_STATE";
 
 struct SupervisorOptions {
   std::string root;                   // working directory of every module; base of relative paths
@@ -24,6 +39,10 @@ struct SupervisorOptions {
   std::string lcm_url;                // resolved URL, given to every module as LCM_DEFAULT_URL
   double duration_s = 0;              // stop by itself after this long (0 = until SIGINT/SIGTERM)
   bool display = false;               // use command_with_display where a profile gives one
+  std::string host_name;              // host_state_t.host; "" = gethostname()
+  // The interface of the multicast route (224.0.0.0/4) the launcher puts back while its bus is down
+  // (an interface that went down and up loses it); "" = leave routes alone. Needs CAP_NET_ADMIN.
+  std::string multicast_route_dev;
 };
 
 // What a profile would start on this host: every process (logger first) with its resolved command line.
@@ -47,15 +66,21 @@ class Supervisor {
   Supervisor(Profile profile, SupervisorOptions options);
   ~Supervisor();
 
-  // Runs until the duration elapses, a stop signal arrives, or a module fails to come up.
-  // Returns 0 after a clean run, 1 when a module never came up.
+  // Runs until the duration elapses or a stop signal arrives. Returns 0 when every module was up (or
+  // had ended as its restart policy allows) at the stop, 1 when one was down.
   int run();
 
   const std::string& log_file() const { return log_file_; }
+  // The host state as published now.
+  host_state_t host_state() const;
 
  private:
+  class SupervisorNode;
   using Clock = std::chrono::steady_clock;
-  enum class State { kPending, kStarting, kUp, kWaitingRestart, kExited, kStopped };
+  enum class State { kPending, kStarting, kUp, kWaitingRestart, kFailed, kExited, kStopped };
+  struct Totals {
+    int64_t received = 0, published = 0, dropped = 0, errors = 0;
+  };
   struct Managed {
     ModuleSpec spec;
     std::vector<std::string> argv;  // resolved program + arguments
@@ -63,18 +88,28 @@ class Supervisor {
     State state = State::kPending;
     int restarts = 0;
     int quick_failures = 0;
+    bool start_failed = false;  // ended or timed out before its first heartbeat: the start order moved on
     Clock::time_point started{};
     Clock::time_point last_beat{};
     Clock::time_point restart_at{};
     heartbeat_t last{};
     bool has_beat = false;
+    Totals before;              // counters of the earlier processes of this module
     std::string last_exit;
   };
 
   void HandleHeartbeat(const heartbeat_t& hb);
   void tick();
+  void before_heartbeat();
   void start(Managed& m);
+  void ended(Managed& m, Clock::time_point now);
   bool ready(const Managed& m) const;
+  bool settled(const Managed& m) const;
+  bool bus_heard(Clock::time_point now) const;
+  void repair_route(Clock::time_point now);
+  std::string down_summary() const;
+  std::string status_of(const Managed& m, Clock::time_point now) const;
+  Totals totals(const Managed& m) const;
   void shutdown();
   void print_summary() const;
   void say(const std::string& line) const;
@@ -82,14 +117,20 @@ class Supervisor {
 
   Profile profile_;
   SupervisorOptions options_;
-  std::unique_ptr<Module> module_;
+  std::unique_ptr<runtime::LcmBus> bus_;
+  std::unique_ptr<SupervisorNode> node_;
   std::vector<Managed> managed_;  // logger first (when any), then the profile's modules in order
   size_t next_to_start_ = 0;
   bool all_up_announced_ = false;
-  bool fatal_ = false;
+  bool shutting_down_ = false;
+  std::string announced_down_;  // the last "what is down" line said, so a change is said once
   std::string log_file_;
-  std::string host_;  // this machine's name, as in heartbeat_t.instance ("host:pid")
+  std::string host_;        // this machine's name, as in heartbeat_t.instance ("host:pid")
+  std::string host_label_;  // host_state_t.host
   Clock::time_point t0_;
+  Clock::time_point last_self_heard_{};  // the launcher's own heartbeat, heard back on the bus
+  bool bus_was_deaf_ = false;
+  Clock::time_point next_route_repair_{};
 };
 
 }  // namespace bricklayer::launcher

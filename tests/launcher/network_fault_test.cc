@@ -1,0 +1,101 @@
+// NETNS (root in a private network namespace): the loopback interface taken down and brought up again,
+// which drops the multicast route, as a switch power cycle does on an exhibit's LAN. The launcher
+// (--multicast-route lo) puts the route back; the modules wait out the outage on their buses and
+// resume publishing with the same pid: nothing is killed as hung, nothing crash-loops.
+#include <signal.h>
+
+#include <catch2/catch.hpp>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <cstdlib>
+#include <thread>
+
+#include "bricklayer/host_state_t.hpp"
+#include "bricklayer/image_t.hpp"
+#include "bricklayer/launcher/supervisor.h"
+#include "bricklayer/prediction/sample_stacks.h"
+#include "bricklayer/prediction_t.hpp"
+#include "bricklayer/stack_t.hpp"
+#include "launcher_test_util.h"
+
+using namespace bricklayer;
+using namespace std::chrono_literals;
+
+namespace {
+int sh(const std::string& command) { return std::system(command.c_str()); }
+}  // namespace
+
+TEST_CASE("an interface down for 7 s and up again: the launcher puts the route back, modules resume, same pids") {
+  test::TempDir dir("ifdown");
+  std::filesystem::create_directories(dir.path / "frames");
+  for (int k = 0; k < 3; ++k)
+    cv::imwrite((dir.path / "frames" / ("f" + std::to_string(k) + ".png")).string(),
+                cv::Mat(60, 80, CV_8UC3, cv::Scalar::all(40 * k)));
+  auto profile = dir.write("p.json", R"({"modules":[
+      {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]},
+      {"name":"camera","command":["bricklayer-camera","--images","frames","--loop","--fps","10"]}]})");
+  auto launcher = test::launch(dir, profile, {"--multicast-route", "lo"});
+  pid_t prediction = 0, camera = 0;
+  {
+    test::Listener bus;
+    REQUIRE(bus.ok());
+    bus.listen(channel(kHeartbeatChannel));
+    heartbeat_t p{}, c{};
+    REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", p) && bus.last_heartbeat("camera", c); }, 15s));
+    prediction = p.pid;
+    camera = c.pid;
+  }
+  REQUIRE(sh("ip link set lo down") == 0);
+  // Longer than the 5 s heartbeat timeout: a launcher that judged silence on a deaf bus would kill both.
+  std::this_thread::sleep_for(7s);
+  REQUIRE(sh("ip link set lo up") == 0);
+  REQUIRE(sh("ip route show 224.0.0.0/4 | grep -q lo") != 0);  // the route is gone with the link
+
+  // Within a few seconds: the route is back (the launcher), and both modules publish again.
+  const auto up_at = std::chrono::steady_clock::now();
+  bool route_back = false;
+  for (int i = 0; i < 100 && !route_back; ++i) {
+    route_back = sh("ip route show 224.0.0.0/4 | grep -q lo") == 0;
+    if (!route_back) std::this_thread::sleep_for(100ms);
+  }
+  REQUIRE(route_back);
+  test::Listener bus;  // a new socket: the old one's membership went with the link
+  REQUIRE(bus.ok());
+  bus.listen(channel(kHeartbeatChannel));
+  bus.listen(channel(kPredictionChannel));
+  bus.listen(channel(kImageChannel));
+  bus.listen(channel(launcher::kHostStateChannel));
+  int64_t frame = 1000;
+  bool predicted = bus.pump_until([&] {
+    ++frame;
+    bricklayer::stack_t s = prediction::sample_stack(5, static_cast<uint32_t>(frame), frame, frame);
+    bus.lcm().publish(channel(kStackChannel), &s);
+    return bus.count(channel(kPredictionChannel)) > 0 && bus.count(channel(kImageChannel)) > 3;
+  }, 15s);
+  const double resumed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - up_at).count();
+  INFO(dir.read("launch.out") << dir.read("launch.err"));
+  REQUIRE(predicted);
+  INFO("publishing again " << resumed_s << " s after the interface came back");
+  heartbeat_t p{}, c{};
+  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", p) && bus.last_heartbeat("camera", c); }, 3s));
+  CHECK(p.pid == prediction);  // never killed, never restarted
+  CHECK(c.pid == camera);
+  CHECK(p.restarts == 0);
+  host_state_t hs{};
+  REQUIRE(bus.pump_until([&] {
+    auto all = bus.on(channel(launcher::kHostStateChannel));
+    return !all.empty() && test::decode(all.back().bytes, hs);
+  }, 3s));
+  REQUIRE(hs.num_modules == 2);
+  CHECK(hs.modules[0].restarts == 0);
+  CHECK(hs.modules[1].restarts == 0);
+  CHECK(hs.status == "ok");
+  launcher.signal(SIGTERM);
+  REQUIRE(launcher.wait_for(15s));
+  const std::string out = dir.read("launch.out");
+  CHECK(out.find("the launcher hears nothing on the bus") != std::string::npos);
+  CHECK(out.find("put the multicast route back: ip route replace 224.0.0.0/4 dev lo") != std::string::npos);
+  CHECK(out.find("silent for") == std::string::npos);
+  CHECK(out.find("died") == std::string::npos);
+}
