@@ -165,7 +165,7 @@ TEST_CASE("a profile naming a binary that does not exist is a clear error before
   CHECK(dir.read("launch.out").find("starting") == std::string::npos);
 }
 
-TEST_CASE("a module that never sends its heartbeat is killed and retried while the rest run; what is down is said") {
+TEST_CASE("a module that never sends its heartbeat is killed and retried while the rest run, and what is down is said") {
   TempDir dir("silent");
   auto profile = dir.write("p.json", R"({"stop_timeout_s":1,"modules":[
       {"name":"mute","command":["/bin/sleep","60"],"heartbeat":"mute","ready_timeout_s":1,"backoff_max_s":0.5},
