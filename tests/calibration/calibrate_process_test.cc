@@ -13,8 +13,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <optional>
@@ -69,6 +71,45 @@ std::string slurp(const std::string& path) {
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+// Waits at most limit_s for a child to exit and returns its wait status. A child still running then
+// is killed (SIGKILL cannot be caught, so the reaping wait returns at once) and the test fails saying
+// so: a process that ignores SIGTERM or hangs must fail its test, not hang the suite.
+int wait_child(const Child& child, double limit_s, const char* after) {
+  const auto start = std::chrono::steady_clock::now();
+  int status = 0;
+  while (true) {
+    const pid_t r = waitpid(child.pid, &status, WNOHANG);
+    if (r == child.pid) return status;
+    if (r < 0) FAIL("waitpid(" << child.pid << ") failed: " << std::strerror(errno));
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > limit_s) {
+      kill(child.pid, SIGKILL);
+      waitpid(child.pid, &status, 0);
+      FAIL("child " << child.pid << " (stderr " << child.stderr_path << ") still running " << limit_s << " s " << after
+                    << "; killed with SIGKILL; stderr:\n" << slurp(child.stderr_path));
+    }
+    usleep(10000);
+  }
+}
+
+// Kills and reaps a child the test did not stop itself (a failed REQUIRE leaves the scope early): a
+// --serve process left running would keep the test's output open and hold up ctest.
+struct ReapOnExit {
+  const Child& child;
+  ~ReapOnExit() {
+    if (waitpid(child.pid, nullptr, WNOHANG) == 0) {
+      kill(child.pid, SIGKILL);
+      waitpid(child.pid, nullptr, 0);
+    }
+  }
+};
+
+// SIGTERM, then a bounded wait (the processes stop within a second when idle; 5 s leaves room for a
+// loaded machine).
+int stop_child(const Child& child, double limit_s = 5) {
+  kill(child.pid, SIGTERM);
+  return wait_child(child, limit_s, "after SIGTERM");
 }
 
 // Projector and camera in one: answers SHOW_PATTERN / CLEAR_PATTERN, streams frames.
@@ -265,6 +306,7 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
     FakeRig rig(camera, projector);
     rig.corrupt_every = 3;  // undecodable frames are counted errors; calibration waits for the next one
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--timeout", "3"}, temp("calibrate.err"));
+    const ReapOnExit reap_child{child};
     const int code = rig.run_until_exit(child);
     const std::string log = slurp(child.stderr_path);
     INFO(log);
@@ -283,6 +325,7 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
   {
     FakeRig rig(camera, projector);
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--self-check"}, temp("check.err"));
+    const ReapOnExit reap_child{child};
     const int code = rig.run_until_exit(child);
     INFO(slurp(child.stderr_path));
     CHECK(code == 0);
@@ -302,6 +345,7 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
     moved.rectified_to_camera = cv::Matx33d(1, 0, -4, 0, 1, 4, 0, 0, 1) * camera.rectified_to_camera;
     FakeRig rig(moved, projector);
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--serve"}, temp("serve.err"));
+    const ReapOnExit reap_child{child};
     CHECK(rig.run_until([&] { return rig.published.has_value(); }, 10));
     rig.publish_stack(3);
     rig.run_until([] { return false; }, 0.3);
@@ -312,9 +356,7 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
     rig.run_until([] { return false; }, 0.3);
     rig.send_self_check();
     const bool measured = rig.run_until([&] { return rig.heartbeat_value("drift_px").has_value(); }, 10);
-    kill(child.pid, SIGTERM);
-    int status = 0;
-    waitpid(child.pid, &status, 0);
+    const int status = stop_child(child);
     const std::string log = slurp(child.stderr_path);
     INFO(log);
     CHECK(measured);
@@ -331,12 +373,11 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--serve", "--self-check-every", "60",
                                "--empty-for", "0.5"},
                               temp("auto.err"));
+    const ReapOnExit reap_child{child};
     rig.run_until([&] { return rig.published.has_value(); }, 10);
     rig.publish_stack(0);
     const bool measured = rig.run_until([&] { return rig.heartbeat_value("drift_px").has_value(); }, 10);
-    kill(child.pid, SIGTERM);
-    int status = 0;
-    waitpid(child.pid, &status, 0);
+    const int status = stop_child(child);
     INFO(slurp(child.stderr_path));
     CHECK(measured);
     CHECK(rig.patterns_shown == 1);
@@ -347,6 +388,7 @@ TEST_CASE("bricklayer-calibrate calibrates over the bus, saves, publishes, and i
     moved.rectified_to_camera = cv::Matx33d(1, 0, 5, 0, 1, -3, 0, 0, 1) * camera.rectified_to_camera;
     FakeRig rig(moved, projector);
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--self-check"}, temp("moved.err"));
+    const ReapOnExit reap_child{child};
     const int code = rig.run_until_exit(child);
     const std::string log = slurp(child.stderr_path);
     INFO(log);
@@ -375,6 +417,7 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
   {
     FakeRig rig(camera, projector);
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--timeout", "3"}, temp("scaled-cal.err"));
+    const ReapOnExit reap_child{child};
     const int code = rig.run_until_exit(child);
     INFO(slurp(child.stderr_path));
     REQUIRE(code == 0);
@@ -390,6 +433,7 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
     rig.set_scene(blocks);
     rig.corrupt_every = 4;  // undecodable frames are counted and skipped
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--scale-from-blocks"}, temp("scale.err"));
+    const ReapOnExit reap_child{child};
     const int code = rig.run_until_exit(child);
     const std::string log = slurp(child.stderr_path);
     INFO(log);
@@ -414,6 +458,7 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
     FakeRig rig(camera, projector);
     rig.set_scene(blocks);
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--scale-from-blocks"}, temp("again.err"));
+    const ReapOnExit reap_child{child};
     const int code = rig.run_until_exit(child);
     const std::string log = slurp(child.stderr_path);
     INFO(log);
@@ -427,6 +472,7 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
     FakeRig rig(camera, projector);
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--scale-from-blocks", "--scale-frames", "4"},
                               temp("empty.err"));
+    const ReapOnExit reap_child{child};
     const int code = rig.run_until_exit(child);
     const std::string log = slurp(child.stderr_path);
     INFO(log);
@@ -439,14 +485,13 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
     FakeRig rig(camera, projector);
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--serve", "--republish", "0.3"},
                               temp("reload.err"));
+    const ReapOnExit reap_child{child};
     REQUIRE(rig.run_until([&] { return rig.published.has_value(); }, 10));
     calibration_t rewritten = board::load_calibration(output);
     rewritten.utime += 1000;
     board::save_calibration(output, rewritten);
     const bool served = rig.run_until([&] { return rig.published->utime == rewritten.utime; }, 5);
-    kill(child.pid, SIGTERM);
-    int status = 0;
-    waitpid(child.pid, &status, 0);
+    const int status = stop_child(child);
     const std::string log = slurp(child.stderr_path);
     INFO(log);
     CHECK(served);
@@ -464,6 +509,7 @@ TEST_CASE("bricklayer-calibrate --serve waits for a calibration file that is not
   FakeRig rig(camera, projector);
   const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--serve", "--republish", "0.3"},
                             temp("later.err"));
+  const ReapOnExit reap_child{child};
   rig.run_until([] { return false; }, 1.5);
   int status = 0;
   CHECK(waitpid(child.pid, &status, WNOHANG) == 0);  // still running
@@ -478,8 +524,7 @@ TEST_CASE("bricklayer-calibrate --serve waits for a calibration file that is not
   written.utime = 4242;
   board::save_calibration(output, written);
   const bool served = rig.run_until([&] { return rig.published.has_value(); }, 5);
-  kill(child.pid, SIGTERM);
-  waitpid(child.pid, &status, 0);
+  status = stop_child(child);
   const std::string log = slurp(child.stderr_path);
   INFO(log);
   REQUIRE(served);
@@ -496,6 +541,7 @@ TEST_CASE("bricklayer-calibrate fails clearly when the projector does not answer
   FakeRig rig(camera, projector, /*answer_projector=*/false);
   const std::string output = temp("never.json");
   const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--timeout", "0.3"}, temp("noprojector.err"));
+  const ReapOnExit reap_child{child};
   const int code = rig.run_until_exit(child);
   const std::string log = slurp(child.stderr_path);
   INFO(log);
@@ -526,8 +572,8 @@ TEST_CASE("bricklayer-calibrate refuses bad flags and a bad calibration file") {
     std::vector<std::string> args = {program(), "--lcm-url", kUrl};
     args.insert(args.end(), c.args.begin(), c.args.end());
     const Child child = spawn(args, temp("flags.err"));
-    int status = 0;
-    waitpid(child.pid, &status, 0);
+    const ReapOnExit reap_child{child};
+    const int status = wait_child(child, 30, "after starting");
     const std::string log = slurp(child.stderr_path);
     INFO(c.args[0] << ": " << log);
     CHECK(WIFEXITED(status));
@@ -538,8 +584,8 @@ TEST_CASE("bricklayer-calibrate refuses bad flags and a bad calibration file") {
 
   const std::string written = temp("default.json");
   const Child child = spawn({program(), "--write-default", "--output", written}, temp("default.err"));
-  int status = 0;
-  waitpid(child.pid, &status, 0);
+  const ReapOnExit reap_child{child};
+  const int status = wait_child(child, 30, "after starting");
   CHECK(WEXITSTATUS(status) == 0);
   const calibration_t d = board::load_calibration(written);
   CHECK(d.projector_width == 1024);
@@ -558,11 +604,11 @@ TEST_CASE("bricklayer-calibrate with the real bricklayer-projection (headless) a
   const Child projection = spawn({std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-projection", "--lcm-url", kUrl,
                                   "--headless", "--mute"},
                                  temp("projection.err"));
+  const ReapOnExit reap_projection{projection};
   const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--timeout", "2"}, temp("calibrate.err"));
+  const ReapOnExit reap_child{child};
   const int code = rig.run_until_exit(child, 60);
-  kill(projection.pid, SIGTERM);
-  int status = 0;
-  waitpid(projection.pid, &status, 0);
+  int status = stop_child(projection);
   INFO("calibrate:\n" << slurp(child.stderr_path) << "projection:\n" << slurp(projection.stderr_path));
   REQUIRE(code == 0);
   {
@@ -571,11 +617,12 @@ TEST_CASE("bricklayer-calibrate with the real bricklayer-projection (headless) a
     const Child projection2 = spawn({std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-projection", "--lcm-url", kUrl,
                                      "--headless", "--mute"},
                                     temp("projection2.err"));
+    const ReapOnExit reap_projection2{projection2};
     const Child wrong = spawn({program(), "--lcm-url", kUrl, "--output", temp("wrong.json"), "--projector-size", "800x600", "--timeout", "2"},
                               temp("wrong.err"));
+    const ReapOnExit reap_wrong{wrong};
     const int wrong_code = again.run_until_exit(wrong, 30);
-    kill(projection2.pid, SIGTERM);
-    waitpid(projection2.pid, &status, 0);
+    status = stop_child(projection2);
     const std::string log = slurp(wrong.stderr_path);
     INFO(log);
     CHECK(wrong_code == 1);

@@ -7,7 +7,9 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/structured_light.hpp>
 
+#include <algorithm>
 #include <map>
+#include <set>
 
 #include "bricklayer/patterns/patterns.h"
 
@@ -90,6 +92,23 @@ TEST_CASE("Every marker set is detected at its layout position") {
     }
   }
   CHECK_THROWS_AS(patterns::marker_layout(patterns::kMarkerSetCount, size), std::invalid_argument);
+}
+
+TEST_CASE("The registration grids at 1024x768: 10 x 7 and 9 x 6 markers, 124 in all, as the READMEs say") {
+  const cv::Size size(1024, 768);
+  const auto grid = patterns::marker_layout(patterns::kMarkerSetGrid, size);
+  const auto shifted = patterns::marker_layout(patterns::kMarkerSetShiftedGrid, size);
+  std::set<int> xs, ys;
+  for (const auto& m : grid) xs.insert(m.pixels.x), ys.insert(m.pixels.y);
+  CHECK(xs.size() == 10);
+  CHECK(ys.size() == 7);
+  CHECK(grid.size() == 70);
+  CHECK(shifted.size() == 54);
+  CHECK(grid.size() + shifted.size() == 124);
+  // The lowest corners, which the default setup's shelf top (row 704) comes close to.
+  float lowest = 0;
+  for (const auto& m : grid) lowest = std::max(lowest, m.corners[2].y);
+  CHECK(lowest == Approx(704.5));
 }
 
 TEST_CASE("Solid colours, chessboard corners and bad commands") {

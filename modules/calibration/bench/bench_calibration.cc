@@ -7,9 +7,10 @@
 // projector with the truth over a grid covering the board. Prints per method the median and p99 (over
 // setups) of the mean and max mapping error, and the median / p99 time of compute_calibration; for the
 // board frame: where the origin lands, how level the surface is, and how far board x is off along the
-// bottom row as calibrated and after the correction from blocks (detection/block_scale.h).
+// bottom row as calibrated and after the correction from blocks (detection/block_scale.h), and after
+// the correction over the whole board (x -5..5 in bands, rows 0, 3, 6 and 9).
 //
-//   bricklayer-bench-calibration [--setups 20] [--nuisance mild] [--gray-code]
+//   bricklayer-bench-calibration [--setups 20] [--nuisance mild] [--gray-code] [--shelf-clearance 8]
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -32,8 +33,16 @@ namespace {
 namespace cal = calibration;
 namespace sim = simcam;
 
+// Board x is judged over the whole board: x from -5 to 5 block lengths in these bands, on these rows.
+constexpr double kBands[][2] = {{-5, -4}, {-4, -2}, {-2, 2}, {2, 4}, {4, 5}};
+constexpr int kBandCount = 5;
+constexpr int kRows[] = {0, 3, 6, 9};
+constexpr int kRowCount = 4;
+
 struct Stats {
-  std::vector<double> mean, max, ms, colour, origin, level, shelf_found, board_x, board_x_fixed;
+  std::vector<double> mean, max, ms, colour, origin, level, shelf_found, board_x, board_x_fixed, reported_max, near_shelf;
+  // Worst |board x error| per setup after the correction from blocks, per x band (all rows) and per row (all x).
+  std::vector<double> band_fixed[kBandCount], row_fixed[kRowCount], whole_fixed, band_raw[kBandCount];
 };
 
 
@@ -53,6 +62,30 @@ double board_x_error(const calibration_t& c, const sim::CameraSetup& camera) {
     worst = std::max(worst, std::abs(board::camera_to_board(c, p).x - bx));
   }
   return worst;
+}
+
+// Worst |board x - true x| per x band (over kRows) and per row (over -5..5), where the camera sees the point.
+struct BoardXGrid {
+  double band[kBandCount] = {0, 0, 0, 0, 0};
+  double row[kRowCount] = {0, 0, 0, 0};
+  double whole = 0;
+};
+BoardXGrid board_x_grid(const calibration_t& c, const sim::CameraSetup& camera) {
+  BoardXGrid g;
+  for (int r = 0; r < kRowCount; ++r) {
+    // Half way up the row's band: block heights in block lengths.
+    const double by = (kRows[r] + 0.5) * camera.board.block_height_px / camera.board.block_length_px;
+    for (double bx = -5; bx <= 5 + 1e-9; bx += 0.25) {
+      const cv::Point2d p = sim::rectified_to_camera(camera, {camera.board.to_px_x(bx), camera.board.to_px_y(by)});
+      if (p.x < 2 || p.y < 2 || p.x > camera.size.width - 3 || p.y > camera.size.height - 3) continue;
+      const double e = std::abs(board::camera_to_board(c, p).x - bx);
+      g.row[r] = std::max(g.row[r], e);
+      g.whole = std::max(g.whole, e);
+      for (int b = 0; b < kBandCount; ++b)
+        if (bx >= kBands[b][0] - 1e-9 && bx <= kBands[b][1] + 1e-9) g.band[b] = std::max(g.band[b], e);
+    }
+  }
+  return g;
 }
 
 // Four blocks standing apart along the bottom row, nudged a little per frame, and one on top.
@@ -154,6 +187,8 @@ int Main(int argc, char** argv) {
   flags.add("setups", "20", "random setups (seeds 1..N)");
   flags.add("nuisance", "mild", "simcam nuisance level: clean, mild, strong, harsh");
   flags.add_bool("no-shelf", "do not search the shelf (board frame from the defaults as given)");
+  flags.add_bool("square-projector", "the projector mounted square (simcam's default: the shelf top just below the bottom marker row) instead of ProjectorSetup::random");
+  flags.add("shelf-clearance", "8", "camera px: markers with a corner this close to the shelf are left out (0 = keep all)");
   flags.add_bool("verbose", "print the board x error of every setup");
   flags.add_bool("gray-code", "also measure a dense Gray-code map (32 more frames per setup; slow)");
   if (!flags.parse(argc, argv)) return 0;
@@ -163,13 +198,14 @@ int Main(int argc, char** argv) {
 
   cal::CalibrationOptions options;
   options.board_from_shelf = !flags.get_bool("no-shelf");
+  options.shelf_clearance_camera_px = flags.get_double("shelf-clearance");
   const bool verbose = flags.get_bool("verbose");
   const auto steps = cal::calibration_steps(options);
   Stats corners, centres, gray;
   int rejected = 0;
   for (int seed = 1; seed <= setups; ++seed) {
     const sim::CameraSetup camera = sim::CameraSetup::random(seed);
-    const sim::ProjectorSetup projector = sim::ProjectorSetup::random(seed);
+    const sim::ProjectorSetup projector = flags.get_bool("square-projector") ? sim::ProjectorSetup{} : sim::ProjectorSetup::random(seed);
     const sim::Renderer renderer(camera, projector);
     std::vector<cv::Mat> frames;
     for (size_t i = 0; i < steps.size(); ++i) {
@@ -185,6 +221,8 @@ int Main(int argc, char** argv) {
       continue;
     }
     mapping_error(result.calibration, camera, projector, corners);
+    corners.reported_max.push_back(result.calibration.reprojection_error_max_px);
+    corners.near_shelf.push_back(result.near_shelf);
     {
       const cv::Matx33d m = board::colour_mixing(result.calibration);
       const double scale = std::max({projector.mixing(0, 0), projector.mixing(1, 1), projector.mixing(2, 2)});
@@ -214,8 +252,17 @@ int Main(int argc, char** argv) {
       if (!fit) {
         std::printf("seed %d: board scale not measured: %s\n", seed, why.c_str());
       } else {
-        const double fixed = board_x_error(detection::apply_board_correction(result.calibration, *fit), camera);
+        const calibration_t corrected = detection::apply_board_correction(result.calibration, *fit);
+        const double fixed = board_x_error(corrected, camera);
         corners.board_x_fixed.push_back(fixed);
+        const BoardXGrid grid = board_x_grid(corrected, camera);
+        const BoardXGrid raw = board_x_grid(result.calibration, camera);
+        for (int b = 0; b < kBandCount; ++b) corners.band_fixed[b].push_back(grid.band[b]), corners.band_raw[b].push_back(raw.band[b]);
+        for (int r = 0; r < kRowCount; ++r) corners.row_fixed[r].push_back(grid.row[r]);
+        corners.whole_fixed.push_back(grid.whole);
+        if (verbose)
+          std::printf("seed %d: whole board (x -5..5, rows 0/3/6/9) worst %.4f; by band %.4f %.4f %.4f %.4f %.4f (scale %.4f keystone %.5f)\n",
+                      seed, grid.whole, grid.band[0], grid.band[1], grid.band[2], grid.band[3], grid.band[4], fit->scale, fit->keystone);
         if (verbose) std::printf("seed %d: board x error %.4f, after the correction from blocks %.4f\n", seed, worst_x, fixed);
       }
     }
@@ -260,6 +307,22 @@ int Main(int argc, char** argv) {
     std::printf("board x on the bottom row (-4..4), worst per setup: as calibrated median %.4f p99 %.4f; corrected from blocks (%zu setups) median %.4f p99 %.4f block lengths\n",
                 percentile(corners.board_x, 0.5), percentile(corners.board_x, 0.99), corners.board_x_fixed.size(),
                 percentile(corners.board_x_fixed, 0.5), percentile(corners.board_x_fixed, 0.99));
+  }
+  if (!corners.reported_max.empty()) {
+    std::printf("calibrator's own largest marker error (what --max-point-error-px judges): median %.3f p99 %.3f px; markers left out at the shelf: median %.0f max %.0f\n",
+                percentile(corners.reported_max, 0.5), percentile(corners.reported_max, 0.99),
+                percentile(corners.near_shelf, 0.5), percentile(corners.near_shelf, 1.0));
+  }
+  if (!corners.whole_fixed.empty()) {
+    std::printf("board x over the whole board after the correction from blocks (%zu setups), worst per setup, median / p99 block lengths:\n",
+                corners.whole_fixed.size());
+    for (int b = 0; b < kBandCount; ++b)
+      std::printf("  x %+.0f..%+.0f (rows 0, 3, 6, 9): %.4f / %.4f   (as calibrated %.4f / %.4f)\n", kBands[b][0], kBands[b][1],
+                  percentile(corners.band_fixed[b], 0.5), percentile(corners.band_fixed[b], 0.99),
+                  percentile(corners.band_raw[b], 0.5), percentile(corners.band_raw[b], 0.99));
+    for (int r = 0; r < kRowCount; ++r)
+      std::printf("  row %d (x -5..5): %.4f / %.4f\n", kRows[r], percentile(corners.row_fixed[r], 0.5), percentile(corners.row_fixed[r], 0.99));
+    std::printf("  whole board: %.4f / %.4f\n", percentile(corners.whole_fixed, 0.5), percentile(corners.whole_fixed, 0.99));
   }
   report("markers, centres only", centres, "fit");
   report("Gray code, dense (bits >= 2)", gray, "fit");

@@ -539,6 +539,7 @@ int Main(int argc, char** argv) {
   flags.add("board", "", "BoardGeometry JSON in rectified pixels (default: the built-in default board)");
   flags.add("projector-size", "1024x768", "projector resolution, WIDTHxHEIGHT (as bricklayer-projection --width/--height)");
   flags.add("max-error-px", "1.0", "reject a calibration whose mean reprojection error exceeds this, projector pixels");
+  flags.add("max-point-error-px", "1.25", "reject a calibration whose largest reprojection error (one marker) exceeds this, projector pixels");
   flags.add("timeout", "5", "seconds to wait for the projector's echo or a camera frame before retrying a step once");
   flags.add("skip-frames", "3", "camera frames to discard after the projector confirms a pattern");
   flags.add("colour-drive", "80", "projector level 1..255 for the red, green and blue frames (lower if the camera saturates)");
@@ -568,6 +569,8 @@ int Main(int argc, char** argv) {
   options.calibration.board_from_shelf = !flags.get_bool("no-shelf");
   options.calibration.max_error_px = flags.get_double("max-error-px");
   if (options.calibration.max_error_px <= 0) throw FlagError("--max-error-px must be positive");
+  options.calibration.max_point_error_px = flags.get_double("max-point-error-px");
+  if (!(options.calibration.max_point_error_px > 0)) throw FlagError("--max-point-error-px must be positive");
   options.timeout_s = flags.get_double("timeout");
   if (options.timeout_s <= 0 || options.timeout_s > 3600) throw FlagError("--timeout must be in (0, 3600] seconds");
   options.skip_frames = static_cast<int>(flags.get_int("skip-frames"));

@@ -314,7 +314,8 @@ LensFit fit_lens_and_homography(const std::vector<Correspondence>& points, cv::S
   for (size_t i = 0; i < points.size(); ++i) {
     const Correspondence& c = points[i];
     if (c.has_corners) {
-      for (int k = 0; k < 4; ++k) all.push_back({c.projector_corners[k], c.camera_corners[k], c.projector, true, i});
+      for (int k = 0; k < 4; ++k)
+        if (c.corner_used[k]) all.push_back({c.projector_corners[k], c.camera_corners[k], c.projector, true, i});
     } else {
       all.push_back({c.projector, c.camera, c.projector, false, i});
     }
@@ -418,6 +419,7 @@ CalibrationResult compute_calibration(const std::vector<cv::Mat>& frames, const 
   cal.projector_height = options.projector_size.height;
   LensFit fit;
   auto take_fit = [&](const LensFit& f) {
+    fit = f;
     cal.camera_matrix[0] = f.camera_matrix(0, 0);
     cal.camera_matrix[1] = f.camera_matrix(1, 1);
     cal.camera_matrix[2] = f.camera_matrix(0, 2);
@@ -425,23 +427,12 @@ CalibrationResult compute_calibration(const std::vector<cv::Mat>& frames, const 
     for (int i = 0; i < 5; ++i) cal.distortion[i] = f.distortion[i];
     for (int i = 0; i < 9; ++i) cal.camera_to_projector[i] = f.camera_to_projector(i / 3, i % 3);
   };
-  try {
-    fit = fit_lens_and_homography(points, camera_size);
-    take_fit(fit);
-    // The centres the reprojection error is reported on, taken in undistorted pixels.
-    recentre_undistorted(points, cal);
-  } catch (const std::exception& e) {
-    result.status = CalibrationStatus::kTooFewPoints;
-    result.message = e.what();
-    return result;
-  }
-
   const double scale = static_cast<double>(camera_size.width) / options.projector_size.width;
   const cv::Matx33d rectified_from_projector(scale, 0, 0, 0, scale, 0, 0, 0, 1);
-  const cv::Matx33d rectified_from_camera = rectified_from_projector * fit.camera_to_projector;
-  cv::Matx33d board_anchor = cv::Matx33d::eye();  // rectified -> rectified: the shelf correction
-  if (options.board_from_shelf) {
-    // The projector's light on the board, seen in the rectified frame (ambient and shadows cancel).
+  // The shelf in the projector's light on the board, seen in the rectified frame of the current fit
+  // (ambient and shadows cancel).
+  auto find_shelf = [&]() {
+    const cv::Matx33d rectified_from_camera = rectified_from_projector * fit.camera_to_projector;
     cv::Mat light = cv::Mat::zeros(camera_size, CV_32F);
     for (int f = 1; f <= 3; ++f) {
       cv::Mat diff;
@@ -461,17 +452,67 @@ CalibrationResult compute_calibration(const std::vector<cv::Mat>& frames, const 
     }
     cv::Mat rectified;
     cv::remap(light + 1.0f, rectified, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
-    result.shelf = find_shelf_corner(rectified, options.board);
-    if (result.shelf.found) {
-      // Rotate about the detected corner so the shelf top is level, then move the corner onto the
-      // geometry's (edge, surface).
-      const double ca = std::cos(-result.shelf.angle_rad), sa = std::sin(-result.shelf.angle_rad);
-      const cv::Point2d c = result.shelf.corner;
-      const cv::Matx33d to_origin(1, 0, -c.x, 0, 1, -c.y, 0, 0, 1);
-      const cv::Matx33d rotate(ca, -sa, 0, sa, ca, 0, 0, 0, 1);
-      const cv::Matx33d to_nominal(1, 0, options.board.edge_x_px, 0, 1, options.board.surface_y_px, 0, 0, 1);
-      board_anchor = to_nominal * rotate * to_origin;
+    return find_shelf_corner(rectified, options.board);
+  };
+  try {
+    take_fit(fit_lens_and_homography(points, camera_size));
+    if (options.board_from_shelf) {
+      result.shelf = find_shelf();
+      // A corner whose refinement window meets the shelf's step is pulled towards it (a few tenths of
+      // a camera pixel, all in one direction along the bottom row): the fit bends there, and the
+      // mapping is off by up to 2 projector px near the shelf. Such markers are left out and the fit
+      // made again; the shelf is then found again in the refitted frame.
+      if (result.shelf.found && options.shelf_clearance_camera_px > 0) {
+        const cv::Matx33d rectified_from_camera = rectified_from_projector * fit.camera_to_projector;
+        const cv::Matx33d camera_from_rectified = rectified_from_camera.inv();
+        const cv::Point2d corner = result.shelf.corner;
+        const cv::Point2d along(-std::cos(result.shelf.angle_rad), -std::sin(result.shelf.angle_rad));  // the top, leftwards
+        const cv::Point2d down(-std::sin(result.shelf.angle_rad), std::cos(result.shelf.angle_rad));  // the end, downwards
+        // Camera pixels between a camera point and the nearest point of a ray of the shelf outline.
+        auto distance_to_ray = [&](cv::Point2d camera_px, cv::Point2d rectified, cv::Point2d dir) {
+          const double t = std::max(0.0, (rectified - corner).dot(dir));
+          const cv::Point2d foot = corner + t * dir;
+          return cv::norm(distort_point(cal, apply_homography(camera_from_rectified, foot)) - camera_px);
+        };
+        int near_corners = 0;
+        for (Correspondence& p : points) {
+          if (!p.has_corners) continue;
+          bool near = false;
+          for (int k = 0; k < 4; ++k) {
+            const cv::Point2d cam = p.camera_corners[k];
+            const cv::Point2d r = apply_homography(rectified_from_camera, undistort_point(cal, cam));
+            p.corner_used[k] = distance_to_ray(cam, r, along) >= options.shelf_clearance_camera_px &&
+                               distance_to_ray(cam, r, down) >= options.shelf_clearance_camera_px;
+            near = near || !p.corner_used[k];
+            near_corners += !p.corner_used[k];
+          }
+          result.near_shelf += near;
+        }
+        if (near_corners > 0) {
+          take_fit(fit_lens_and_homography(points, camera_size));
+          result.shelf = find_shelf();
+        }
+      }
     }
+    // The centres the reprojection error is reported on, taken in undistorted pixels.
+    recentre_undistorted(points, cal);
+  } catch (const std::exception& e) {
+    result.status = CalibrationStatus::kTooFewPoints;
+    result.message = e.what();
+    return result;
+  }
+
+  const cv::Matx33d rectified_from_camera = rectified_from_projector * fit.camera_to_projector;
+  cv::Matx33d board_anchor = cv::Matx33d::eye();  // rectified -> rectified: the shelf correction
+  if (options.board_from_shelf && result.shelf.found) {
+    // Rotate about the detected corner so the shelf top is level, then move the corner onto the
+    // geometry's (edge, surface).
+    const double ca = std::cos(-result.shelf.angle_rad), sa = std::sin(-result.shelf.angle_rad);
+    const cv::Point2d c = result.shelf.corner;
+    const cv::Matx33d to_origin(1, 0, -c.x, 0, 1, -c.y, 0, 0, 1);
+    const cv::Matx33d rotate(ca, -sa, 0, sa, ca, 0, 0, 0, 1);
+    const cv::Matx33d to_nominal(1, 0, options.board.edge_x_px, 0, 1, options.board.surface_y_px, 0, 0, 1);
+    board_anchor = to_nominal * rotate * to_origin;
   }
   const auto board = options.board.camera_to_board();
   const cv::Matx33d board_from_rectified(board.data());
@@ -482,11 +523,16 @@ CalibrationResult compute_calibration(const std::vector<cv::Mat>& frames, const 
   cal.block_height = options.board.block_height_px / options.board.block_length_px;
 
   double sum = 0, max = 0;
+  cv::Point2d worst_at;
   int inliers = 0;
+  int counted = 0;  // markers whose centre is judged: every corner used
   for (size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].all_corners_used()) continue;
+    ++counted;
     if (!fit.inlier[i]) continue;
     const double e = cv::norm(camera_to_projector(cal, points[i].camera) - points[i].projector);
     sum += e;
+    if (e > max) worst_at = points[i].projector;
     max = std::max(max, e);
     ++inliers;
   }
@@ -494,8 +540,10 @@ CalibrationResult compute_calibration(const std::vector<cv::Mat>& frames, const 
   cal.reprojection_error_mean_px = inliers > 0 ? sum / inliers : 0.0;
   cal.reprojection_error_max_px = max;
 
-  const std::string summary = std::to_string(inliers) + " of " + std::to_string(points.size()) +
-                              " markers used, reprojection error mean " + fmt(cal.reprojection_error_mean_px) +
+  const std::string summary = std::to_string(inliers) + " of " + std::to_string(counted) +
+                              " markers used" +
+                              (result.near_shelf > 0 ? " (" + std::to_string(result.near_shelf) + " more with corners left out at the shelf edge)" : std::string()) +
+                              ", reprojection error mean " + fmt(cal.reprojection_error_mean_px) +
                               " px, max " + fmt(cal.reprojection_error_max_px) + " px (projector pixels), k1 " +
                               fmt(cal.distortion[0], 4) + ", k2 " + fmt(cal.distortion[1], 4);
   if (colour.saturated) {
@@ -504,7 +552,7 @@ CalibrationResult compute_calibration(const std::vector<cv::Mat>& frames, const 
                      std::to_string(options.colour_drive) + "); " + summary;
     return result;
   }
-  if (inliers < options.min_correspondences || inliers * 10 < static_cast<int>(points.size()) * 8) {
+  if (inliers < options.min_correspondences || inliers * 10 < counted * 8) {
     result.status = CalibrationStatus::kTooFewPoints;
     result.message = "too many marker corners disagree with the fit (reflections? something on the board?): " + summary;
     return result;
@@ -514,6 +562,15 @@ CalibrationResult compute_calibration(const std::vector<cv::Mat>& frames, const 
     result.message = "calibration rejected: mean reprojection error " + fmt(cal.reprojection_error_mean_px) +
                      " px exceeds --max-error-px " + fmt(options.max_error_px) +
                      " (camera out of focus, moving, or the board not flat?); " + summary;
+    return result;
+  }
+  if (cal.reprojection_error_max_px > options.max_point_error_px) {
+    result.status = CalibrationStatus::kErrorTooHigh;
+    result.message = "calibration rejected: the largest reprojection error " + fmt(cal.reprojection_error_max_px) +
+                     " px (at the marker drawn at projector pixel (" + fmt(worst_at.x, 0) + ", " + fmt(worst_at.y, 0) +
+                     ")) exceeds --max-point-error-px " + fmt(options.max_point_error_px) +
+                     ": the mapping is bent there (something on the board or a reflection near that marker, the board not flat, "
+                     "the camera out of focus?); " + summary;
     return result;
   }
   try {
