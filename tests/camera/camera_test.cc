@@ -8,6 +8,8 @@
 
 #include <chrono>
 #include <functional>
+#include <iterator>
+#include <thread>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -23,6 +25,7 @@
 #include "bricklayer/common/module.h"
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/image_t.hpp"
+#include "bricklayer/launcher/process.h"
 
 using namespace bricklayer;
 using test::spawn;
@@ -221,5 +224,24 @@ TEST_CASE("the folder source skips unreadable images and lists only image files"
   while (source->next(frame)) ++read;
   CHECK(read == 2);
   CHECK(source->unreadable() == 1);  // bricklayer-camera and bricklayer-vision count it as an error
+  fs::remove_all(dir);
+}
+
+TEST_CASE("waiting for a camera that is not there prints its reason once, not a line a second") {
+  const fs::path dir = temp_dir("quiet");
+  launcher::SpawnOptions o;
+  o.stdout_path = (dir / "out").string();
+  o.merge_stderr = true;
+  // An index, so OpenCV's V4L2 backend is asked (and would warn) at every attempt.
+  auto camera = launcher::Process::spawn({kBin, "--device", "57", "--lcm-url", kUrl}, o);
+  std::this_thread::sleep_for(std::chrono::milliseconds(4500));
+  REQUIRE(camera.running());  // waiting, not exited
+  camera.stop(std::chrono::seconds(5));
+  std::ifstream in(dir / "out");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  INFO(text);
+  size_t lines = static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
+  CHECK(lines <= 4);  // OpenCV's first warning, ours, the stop line
+  CHECK(text.find("waiting for camera 57") != std::string::npos);
   fs::remove_all(dir);
 }

@@ -313,3 +313,41 @@ TEST_CASE("a run with a duration stops by itself (SIGTERM, deadline, SIGKILL) an
   }
   CHECK(beats >= 2);
 }
+
+TEST_CASE("a camera absent at boot: the exhibit runs, the camera waits with the same pid, and the host state says so") {
+  TempDir dir("nocamera");
+  auto profile = dir.write("p.json", R"({"modules":[
+      {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]},
+      {"name":"camera","command":["bricklayer-camera","--device","/dev/video-none"]}]})");
+  auto launcher = launch(dir, profile);
+  test::Listener bus;
+  REQUIRE(bus.ok());
+  bus.listen(channel(kHeartbeatChannel));
+  bus.listen(channel(launcher::kHostStateChannel));
+  heartbeat_t first{};
+  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("camera", first); }, 10s));
+  bus.pump(6s);  // beyond the old launcher's 3 quick tries
+  REQUIRE(launcher.running());
+  heartbeat_t later{};
+  REQUIRE(bus.last_heartbeat("camera", later));
+  CHECK(later.pid == first.pid);
+  CHECK(later.restarts == 0);
+  CHECK(later.status.rfind("waiting for camera /dev/video-none: cannot open camera", 0) == 0);
+  host_state_t hs{};
+  auto all = bus.on(channel(launcher::kHostStateChannel));
+  REQUIRE(!all.empty());
+  REQUIRE(test::decode(all.back().bytes, hs));
+  REQUIRE(hs.num_modules == 2);
+  CHECK(hs.modules[1].name == "camera");
+  CHECK(hs.modules[1].state == module_state_t::STATE_UP);
+  CHECK(hs.modules[1].status == later.status);
+  CHECK(hs.modules[1].restarts == 0);
+  launcher.signal(SIGTERM);
+  auto st = launcher.wait_for(15s);
+  REQUIRE(st);
+  CHECK(st->clean());
+  const std::string out = dir.read("launch.out");
+  INFO(out);
+  CHECK(out.find("all 2 processes of profile p are up") != std::string::npos);
+  CHECK(out.find("died") == std::string::npos);
+}

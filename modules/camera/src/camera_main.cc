@@ -18,6 +18,7 @@
 #include <functional>
 #include <iostream>
 
+#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "bricklayer/frames/camera_controls.h"
@@ -102,9 +103,15 @@ class CameraNode final : public runtime::Node {
       return false;
     }
     next_open_ = now() + 1'000'000;
+    // OpenCV says "can't open camera by index" at every attempt; once our own line has said it, the
+    // retries run with OpenCV's warnings off (a line a second would fill a journal in a day).
+    const auto opencv_level = cv::utils::logging::getLogLevel();
+    if (!waiting_.empty()) cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
     try {
       source_ = open_();
+      cv::utils::logging::setLogLevel(opencv_level);
     } catch (const std::exception& e) {
+      cv::utils::logging::setLogLevel(opencv_level);
       const std::string why = "waiting for " + what_ + ": " + e.what();
       if (why != waiting_) log::warn(why, "; trying again every second");
       waiting_ = why;
