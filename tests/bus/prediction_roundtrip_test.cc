@@ -1,7 +1,11 @@
 // NETNS: a real bricklayer-prediction process on the real LCM bus. 1,000 stacks in, 1,000 predictions
-// out, each byte-identical to a prediction_t built here from calling the core directly.
+// out, each byte-identical to a prediction_t built here from calling the core directly (the knife-edge verdict).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
+
+#include "bricklayer/core/knife_edge.h"
 #include "bricklayer/core/predict.h"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/prediction/prediction_logic.h"
@@ -18,37 +22,59 @@ using namespace std::chrono_literals;
 namespace {
 constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
-// The expected answer, from the core directly (independent of PredictionLogic's mapping).
-prediction_t from_core(const stack_t& s) {
-  core::Stack cs;
-  cs.block_length = s.block_length;
-  cs.block_height = s.block_height;
-  cs.table_edge = s.table_edge;
-  for (const auto& b : s.blocks) cs.blocks.push_back({b.id, b.row, b.x});
-  core::PredictOptions options;
-  options.position_tolerance = prediction::kMeasuredPositionTolerance;  // the process's default
-  core::Prediction v = core::predict(cs, options);
-  prediction_t p{};
-  p.utime = s.utime;
-  p.frame_number = s.frame_number;
-  p.status = prediction_t::STATUS_OK;
-  p.balanced = v.balanced;
-  p.overhang = v.overhang;
-  p.score = v.score;
-  p.annotator = v.annotator;
-  p.solver = v.solver;
-  p.position_tolerance = v.position_tolerance;
-  for (const auto& b : v.blocks) {
-    block_prediction_t bp{};
-    bp.id = b.id;
-    bp.state = static_cast<int8_t>(b.state);
-    bp.accel = b.accel;
-    bp.alpha = b.alpha;
-    p.blocks.push_back(bp);
+// The expected answer, from the core directly (independent of PredictionLogic's mapping): the knife-edge
+// verdict with every block's uncertainty at the process's floor, and the node's hysteresis written out again
+// (a certain verdict right after a knife edge is shown as a knife edge until |margin| >= 1.5 x uncertainty).
+struct Expected {
+  int8_t shown = -1;
+  prediction_t operator()(const stack_t& s) {
+    core::Stack cs;
+    cs.block_length = s.block_length;
+    cs.block_height = s.block_height;
+    cs.table_edge = s.table_edge;
+    for (const auto& b : s.blocks) cs.blocks.push_back({b.id, b.row, b.x});
+    const double floor = prediction::kUncertaintyFloor;  // the process's default
+    const core::KnifeEdgeVerdict k = core::judge_knife_edge(cs, std::vector<double>(cs.blocks.size(), floor));
+    const core::Prediction& v = k.nominal;
+    const int8_t raw = static_cast<int8_t>(k.certainty);
+    int8_t verdict = raw;
+    if (raw != prediction_t::VERDICT_KNIFE_EDGE && shown == prediction_t::VERDICT_KNIFE_EDGE &&
+        std::abs(k.margin) < 1.5 * k.uncertainty)
+      verdict = prediction_t::VERDICT_KNIFE_EDGE;
+    shown = verdict;
+    prediction_t p{};
+    p.utime = s.utime;
+    p.frame_number = s.frame_number;
+    p.status = prediction_t::STATUS_OK;
+    p.balanced = verdict != prediction_t::VERDICT_FALLS;
+    p.overhang = v.overhang;
+    p.score = v.score;
+    p.annotator = v.annotator;
+    p.solver = v.solver;
+    p.position_tolerance = 0.0;
+    p.verdict = verdict;
+    p.raw_verdict = raw;
+    p.margin = k.margin;
+    p.margin_mm = k.margin * 75.0;
+    p.uncertainty = k.uncertainty;
+    p.uncertainty_floor = floor;
+    p.counts_for_max = verdict != prediction_t::VERDICT_FALLS;
+    p.deciding = k.deciding;
+    p.num_deciding = static_cast<int32_t>(k.deciding.size());
+    for (const auto& b : v.blocks) {
+      block_prediction_t bp{};
+      bp.id = b.id;
+      bp.state = verdict == prediction_t::VERDICT_FALLS ? static_cast<int8_t>(b.state) : block_prediction_t::STATE_STABLE;
+      bp.accel = b.accel;
+      bp.alpha = b.alpha;
+      bp.deciding = std::find(k.deciding.begin(), k.deciding.end(), b.id) != k.deciding.end();
+      bp.uncertainty = floor;
+      p.blocks.push_back(bp);
+    }
+    p.num_blocks = static_cast<int32_t>(p.blocks.size());
+    return p;
   }
-  p.num_blocks = static_cast<int32_t>(p.blocks.size());
-  return p;
-}
+};
 
 }  // namespace
 
@@ -76,6 +102,7 @@ TEST_CASE("1,000 stacks through bricklayer-prediction come back byte-identical t
     if (m.channel == channel(kPredictionChannel)) answers.push_back(m.bytes);
   REQUIRE(answers.size() == static_cast<size_t>(kCount));
   int identical = 0;
+  Expected from_core;
   for (int i = 0; i < kCount; ++i) {
     prediction_t expected = from_core(sent[static_cast<size_t>(i)]);
     if (!expected.balanced) ++unbalanced;

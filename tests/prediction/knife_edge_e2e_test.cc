@@ -96,7 +96,8 @@ TEST_CASE("zero-margin piles measured through simcam and vision stay blue, a rea
                            [](const block_t& a, const block_t& b) { return a.x == b.x && a.row == b.row; });
     }
     if (!settled) continue;
-    CHECK(p.position_tolerance == prediction::kMeasuredPositionTolerance);
+    CHECK(p.position_tolerance == 0.0);  // no widening: the knife-edge verdict
+    CHECK(p.uncertainty_floor == prediction::kUncertaintyFloor);
     const core::Prediction expected = core::predict(to_core(t->second));  // the true pile, exact positions
     if (expected.balanced) {
       ++standing;

@@ -11,7 +11,7 @@
 using namespace bricklayer;
 using prediction::PredictionConfig;
 using prediction::PredictionLogic;
-using prediction::kMeasuredPositionTolerance;
+using prediction::kUncertaintyFloor;
 
 namespace {
 
@@ -139,7 +139,7 @@ TEST_CASE("invalid stacks are answered with STATUS_INVALID_STACK and the core's 
 }
 
 TEST_CASE("a failing core is a solver error with its message, not a crash") {
-  auto failing = [](const core::Stack&, const core::PredictOptions&) -> core::Prediction {
+  auto failing = [](const core::Stack&, const std::vector<double>&, const core::PredictOptions&) -> core::KnifeEdgeVerdict {
     throw core::SolverError("balance LP (clp): numerical trouble");
   };
   PredictionLogic logic(PredictionConfig{}, failing);
@@ -147,7 +147,9 @@ TEST_CASE("a failing core is a solver error with its message, not a crash") {
   CHECK(p.status == prediction_t::STATUS_SOLVER_ERROR);
   CHECK(p.error == "balance LP (clp): numerical trouble");
   CHECK(p.num_blocks == 0);
-  auto odd = [](const core::Stack&, const core::PredictOptions&) -> core::Prediction { throw std::bad_alloc(); };
+  auto odd = [](const core::Stack&, const std::vector<double>&, const core::PredictOptions&) -> core::KnifeEdgeVerdict {
+    throw std::bad_alloc();
+  };
   PredictionLogic logic2(PredictionConfig{}, odd);
   CHECK(logic2.answer(one_block(-0.4)).status == prediction_t::STATUS_SOLVER_ERROR);
 }
@@ -167,28 +169,86 @@ TEST_CASE("a bad configuration is rejected up front") {
   CHECK_THROWS_AS(PredictionLogic(config), std::invalid_argument);
   config.position_tolerance = 0.5;
   CHECK_THROWS_AS(PredictionLogic(config), std::invalid_argument);
+  config.position_tolerance = 0.0;
+  config.uncertainty_floor = -0.001;
+  CHECK_THROWS_AS(PredictionLogic(config), std::invalid_argument);
+  config.uncertainty_floor = 0.2;
+  CHECK_THROWS_AS(PredictionLogic(config), std::invalid_argument);
 }
 
-TEST_CASE("measured positions get the default allowance, recorded in every answer") {
-  PredictionLogic measured(PredictionConfig{});
-  PredictionConfig exact_config;
-  exact_config.position_tolerance = 0.0;
-  PredictionLogic exact(exact_config);
-  // A single block's knife edge is its centre over the surface edge (x = -0.5).
-  const double t = kMeasuredPositionTolerance;
-  for (double past : {0.2 * t, 0.9 * t}) {
+TEST_CASE("measured positions: stable, falls or knife edge with the floor, margin and deciding blocks") {
+  PredictionLogic logic(PredictionConfig{});
+  const double u = kUncertaintyFloor;
+  // A single block's knife edge is its centre over the surface edge (x = -0.5); its margin is that distance.
+  for (double past : {0.2 * u, 0.9 * u}) {
     INFO("centre " << past << " past the edge");
-    CHECK(measured.answer(one_block(-0.5 + past)).balanced);
-    CHECK_FALSE(exact.answer(one_block(-0.5 + past)).balanced);
+    const prediction_t p = logic.answer(one_block(-0.5 + past));
+    CHECK(p.raw_verdict == prediction_t::VERDICT_KNIFE_EDGE);
+    CHECK(p.verdict == prediction_t::VERDICT_KNIFE_EDGE);
+    CHECK(p.balanced);  // not certain to fall: no red, the score counts
+    CHECK(p.counts_for_max);
+    CHECK(p.margin == Approx(-past).margin(1e-5));
+    CHECK(p.margin_mm == Approx(-past * 75.0).margin(1e-3));
+    CHECK(p.blocks.at(0).state == block_prediction_t::STATE_STABLE);
+    CHECK(p.blocks.at(0).deciding);
+    CHECK(p.deciding == std::vector<int64_t>{42});
+    const prediction_t in = logic.answer(one_block(-0.5 - past));
+    CHECK(in.raw_verdict == prediction_t::VERDICT_KNIFE_EDGE);
+    CHECK(in.margin == Approx(past).margin(1e-6));
+    CHECK(in.deciding == std::vector<int64_t>{42});  // the cause if it fell
   }
-  const prediction_t over = measured.answer(one_block(-0.5 + 1.5 * t));
+  const prediction_t over = logic.answer(one_block(-0.5 + 1.5 * u));
+  CHECK(over.raw_verdict == prediction_t::VERDICT_FALLS);
   CHECK_FALSE(over.balanced);
+  CHECK_FALSE(over.counts_for_max);
   CHECK(over.blocks.at(0).state == block_prediction_t::STATE_CAUSE);
-  CHECK(over.position_tolerance == t);
-  CHECK(exact.answer(one_block(-0.6)).position_tolerance == 0.0);
+  CHECK(over.margin <= -u);
+  const prediction_t stands = logic.answer(one_block(-0.5 - 1.5 * u));
+  CHECK(stands.raw_verdict == prediction_t::VERDICT_STABLE);
+  CHECK(stands.margin == Approx(1.5 * u).margin(1e-6));
+  CHECK(stands.deciding.empty());
+  CHECK(stands.uncertainty == u);
+  CHECK(stands.uncertainty_floor == u);
+  CHECK(stands.blocks.at(0).uncertainty == u);
+  CHECK(stands.position_tolerance == 0.0);
   bricklayer::stack_t none = one_block(-0.6);
   none.status = bricklayer::stack_t::STATUS_NO_FRAME;
-  CHECK(measured.answer(none).position_tolerance == t);  // failures say the configuration too
+  const prediction_t failed = logic.answer(none);
+  CHECK(failed.uncertainty_floor == u);  // failures say the configuration too
+  CHECK(failed.verdict == prediction_t::VERDICT_KNIFE_EDGE);
+  CHECK_FALSE(failed.counts_for_max);
+}
+
+TEST_CASE("vision's own uncertainty counts when above the floor; a bad one is an invalid stack") {
+  PredictionLogic logic(PredictionConfig{});
+  bricklayer::stack_t s = one_block(-0.5 - 0.008);  // 0.008 inside: stable with the floor ...
+  CHECK(logic.answer(s).raw_verdict == prediction_t::VERDICT_STABLE);
+  s.blocks[0].x_uncertainty = 0.01;  // ... a knife edge when vision says +-0.01
+  const prediction_t p = logic.answer(s);
+  CHECK(p.raw_verdict == prediction_t::VERDICT_KNIFE_EDGE);
+  CHECK(p.uncertainty == 0.01);
+  CHECK(p.blocks.at(0).uncertainty == 0.01);
+  s.blocks[0].x_uncertainty = 1.0;  // capped at the core's limit
+  CHECK(logic.answer(s).uncertainty == core::kMaxUncertainty);
+  for (double bad : {-0.001, std::numeric_limits<double>::quiet_NaN()}) {
+    s.blocks[0].x_uncertainty = bad;
+    const prediction_t q = logic.answer(s);
+    CHECK(q.status == prediction_t::STATUS_INVALID_STACK);
+    CHECK(q.error.find("x_uncertainty") != std::string::npos);
+  }
+  PredictionConfig exact;
+  exact.uncertainty_floor = 0.0;  // no floor, vision silent: the exact verdict
+  CHECK(PredictionLogic(exact).answer(one_block(-0.5 + 0.0005)).raw_verdict == prediction_t::VERDICT_FALLS);
+}
+
+TEST_CASE("the legacy widening still answers stable or falls, never a knife edge") {
+  PredictionConfig legacy;
+  legacy.position_tolerance = 0.005;
+  PredictionLogic logic(legacy);
+  const prediction_t p = logic.answer(one_block(-0.5 + 0.0045));
+  CHECK(p.raw_verdict == prediction_t::VERDICT_STABLE);
+  CHECK(p.position_tolerance == 0.005);
+  CHECK(logic.answer(one_block(-0.5 + 0.0075)).raw_verdict == prediction_t::VERDICT_FALLS);
 }
 
 TEST_CASE("answers are a pure function of the stack: same bytes every time, for every annotator") {

@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include "bricklayer/common/channels.h"
+#include "bricklayer/core/knife_edge.h"
 #include "bricklayer/core/predict.h"
 #include "bricklayer/messages/stack.h"
 #include "bricklayer/prediction/prediction_node.h"
@@ -28,17 +29,23 @@ TEST_CASE("the prediction node answers each stack with the core's verdict, its u
     rig.publish(kStacks, s);
     auto p = rec.wait_for<prediction_t>(kPredictions, [f](const prediction_t& m) { return m.frame_number == f; }, 50ms);
     REQUIRE(p);
-    const core::Prediction expected = core::predict(messages::to_core_stack(s), [] {
-      core::PredictOptions o;
-      o.position_tolerance = prediction::kMeasuredPositionTolerance;
-      return o;
-    }());
+    const core::Stack cs = messages::to_core_stack(s);
+    const core::KnifeEdgeVerdict k =
+        core::judge_knife_edge(cs, std::vector<double>(cs.blocks.size(), prediction::kUncertaintyFloor));
     CHECK(p->utime == 1000 + f);
     CHECK(p->status == prediction_t::STATUS_OK);
-    CHECK(p->balanced == expected.balanced);
-    CHECK(p->score == expected.score);
-    REQUIRE(p->blocks.size() == expected.blocks.size());
-    for (size_t i = 0; i < expected.blocks.size(); ++i) CHECK(p->blocks[i].state == static_cast<int8_t>(expected.blocks[i].state));
+    CHECK(p->raw_verdict == static_cast<int8_t>(k.certainty));
+    CHECK((p->verdict == p->raw_verdict || p->verdict == prediction_t::VERDICT_KNIFE_EDGE));
+    CHECK(p->balanced == (p->verdict != prediction_t::VERDICT_FALLS));
+    CHECK(p->margin == k.margin);
+    CHECK(p->deciding == k.deciding);
+    CHECK(p->score == k.nominal.score);
+    REQUIRE(p->blocks.size() == k.nominal.blocks.size());
+    for (size_t i = 0; i < k.nominal.blocks.size(); ++i) {
+      const int8_t state = p->verdict == prediction_t::VERDICT_FALLS ? static_cast<int8_t>(k.nominal.blocks[i].state)
+                                                                      : block_prediction_t::STATE_STABLE;
+      CHECK(p->blocks[i].state == state);
+    }
   }
   const auto timings = rec.all<timing_t>(channel(kTimingChannel));
   REQUIRE(timings.size() == 20);
@@ -108,4 +115,32 @@ TEST_CASE("the prediction node run twice on the same log publishes byte-identica
   const auto first = replay();
   CHECK(first.size() == 200);
   CHECK(first == replay());
+}
+
+TEST_CASE("the node's verdict does not flicker for a pile whose measured margin jitters across the boundary") {
+  harness::Rig rig;
+  rig.add<prediction::PredictionNode>(prediction::PredictionConfig{});
+  auto& rec = rig.record({kPredictions});
+  const double u = prediction::kUncertaintyFloor;
+  int raw_changes = 0, shown_changes = 0;
+  int8_t last_raw = -1, last_shown = -1;
+  for (int f = 0; f < 40; ++f) {
+    // One block whose centre is 0.8 u or 1.4 u inside the edge, alternately (vision's noise on a standing pile).
+    core::Stack cs;
+    cs.blocks.push_back({7, 0, -0.5 - (f % 2 == 0 ? 1.4 : 0.8) * u});
+    rig.publish(kStacks, messages::to_stack_message(cs, 1000 + f, f));
+    auto p = rec.wait_for<prediction_t>(kPredictions, [f](const prediction_t& m) { return m.frame_number == f; }, 50ms);
+    REQUIRE(p);
+    CHECK((p->verdict == p->raw_verdict || p->verdict == prediction_t::VERDICT_KNIFE_EDGE));
+    CHECK(p->balanced);
+    if (last_raw >= 0) {
+      raw_changes += p->raw_verdict != last_raw;
+      shown_changes += p->verdict != last_shown;
+    }
+    last_raw = p->raw_verdict;
+    last_shown = p->verdict;
+  }
+  CHECK(raw_changes == 39);   // every frame flips between stable and knife edge ...
+  CHECK(shown_changes == 1);  // ... what is shown changes once
+  CHECK(last_shown == prediction_t::VERDICT_KNIFE_EDGE);
 }

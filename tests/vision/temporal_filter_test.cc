@@ -55,3 +55,26 @@ TEST_CASE("blocks in different rows are different tracks") {
   REQUIRE(both.size() == 2);
   CHECK(both[0].id != both[1].id);
 }
+
+TEST_CASE("the lag: how far the published x is from the latest measurement, the deadband while unseen") {
+  TemporalFilter filter;  // deadband 0.01
+  auto seen = [](double x) {
+    DetectedBlock b;
+    b.row = 0;
+    b.x = x;
+    return std::vector<DetectedBlock>{b};
+  };
+  filter.update(seen(-0.5));
+  auto out = filter.update(seen(-0.5));
+  REQUIRE(out.size() == 1);
+  CHECK(out[0].lag == 0.0);
+  out = filter.update(seen(-0.494));  // inside the deadband: published x kept, 0.006 behind
+  REQUIRE(out.size() == 1);
+  CHECK(out[0].block.x == -0.5);
+  CHECK(out[0].lag == Approx(0.006));
+  out = filter.update(seen(-0.48));  // outside: published, no lag
+  CHECK(out[0].lag == 0.0);
+  out = filter.update({});  // unseen, held
+  REQUIRE(out.size() == 1);
+  CHECK(out[0].lag == 0.01);
+}

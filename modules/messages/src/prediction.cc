@@ -18,6 +18,8 @@ void put_verdict(const core::Prediction& verdict, prediction_t& out) {
     b.state = static_cast<int8_t>(v.state);
     b.accel = v.accel;
     b.alpha = v.alpha;
+    b.deciding = false;
+    b.uncertainty = 0.0;
     out.blocks.push_back(b);
   }
   out.num_blocks = static_cast<int32_t>(out.blocks.size());

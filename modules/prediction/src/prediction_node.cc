@@ -19,7 +19,8 @@ PredictionNode::PredictionNode(const Config& config, runtime::Bus& bus)
 void PredictionNode::on_stack(const stack_t& stack) {
   const int64_t received = now();
   const messages::Stopwatch watch;
-  const prediction_t p = logic_.answer(stack);
+  prediction_t p = logic_.answer(stack);
+  if (p.status == prediction_t::STATUS_OK) show(p, hysteresis_.update(p));
   const int64_t elapsed = watch.elapsed_us();
   if (p.status == prediction_t::STATUS_INVALID_STACK || p.status == prediction_t::STATUS_SOLVER_ERROR)
     error(p.status == prediction_t::STATUS_INVALID_STACK ? "invalid stacks" : "solver failures",

@@ -60,7 +60,9 @@ std::vector<FilteredBlock> TemporalFilter::update(const std::vector<DetectedBloc
       const double left_before = track.published.left_px;
       if (std::abs(m.x - x_before) > config_.deadband) {
         track.published = m;
+        track.lag = 0.0;
       } else {
+        track.lag = std::abs(m.x - x_before);
         // Inside the deadband: keep the published position, refresh everything else.
         track.published = m;
         track.published.x = x_before;
@@ -70,6 +72,7 @@ std::vector<FilteredBlock> TemporalFilter::update(const std::vector<DetectedBloc
       }
     } else {
       ++track.missed;
+      track.lag = config_.deadband;  // unseen: it may have moved up to the deadband unnoticed
     }
     if (std::popcount(track.history) >= config_.confirm_hits) track.confirmed = true;
     const bool lost = track.confirmed ? track.missed > config_.hold_frames
@@ -99,7 +102,7 @@ std::vector<FilteredBlock> TemporalFilter::update(const std::vector<DetectedBloc
   tracks_ = std::move(live);
   std::vector<FilteredBlock> out;
   for (const Track& t : tracks_)
-    if (t.confirmed) out.push_back({t.id, t.published, t.missed});
+    if (t.confirmed) out.push_back({t.id, t.published, t.missed, t.lag});
   std::sort(out.begin(), out.end(), [](const FilteredBlock& a, const FilteredBlock& b) {
     return std::tie(a.block.row, a.block.x, a.id) < std::tie(b.block.row, b.block.x, b.id);
   });

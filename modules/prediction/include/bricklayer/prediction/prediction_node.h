@@ -4,13 +4,14 @@
 //             as dropped). Messages larger than --max-blocks allows, malformed bytes and other types are
 //             counted errors.
 // Publishes:  BL_PREDICTION (prediction_t) for every stack handled, carrying the stack's utime and
-//             frame_number; a pure function of that stack (PredictionLogic), so replays compare byte for
-//             byte.
+//             frame_number; a pure function of that stack (PredictionLogic) except `verdict`, which the
+//             hysteresis derives from the answers in order (replays of the same log reproduce it).
 //             BL_TIMING (timing_t, stage "predict"): the run-to-run timing, kept out of prediction_t.
 //             BL_HEARTBEAT once a second (status "no stacks for N s" when vision falls silent).
 #pragma once
 
 #include "bricklayer/prediction/prediction_logic.h"
+#include "bricklayer/prediction/verdict_hysteresis.h"
 #include "bricklayer/runtime/node.h"
 
 namespace bricklayer::prediction {
@@ -34,6 +35,7 @@ class PredictionNode final : public runtime::Node {
   void on_stack(const stack_t& stack);
 
   PredictionLogic logic_;
+  VerdictHysteresis hysteresis_;
   std::string prediction_channel_, timing_channel_;
 };
 

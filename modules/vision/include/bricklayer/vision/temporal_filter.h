@@ -24,6 +24,9 @@ struct FilteredBlock {
   int64_t id = 0;
   detection::DetectedBlock block;  // published geometry (x within the deadband of the latest measurement)
   int missed = 0;       // consecutive frames without a measurement (0 = seen in this frame)
+  // Block lengths the published x is away from the latest measurement (inside the deadband it is kept while the
+  // measurement moves); the deadband itself while the block is held unseen.
+  double lag = 0.0;
 };
 
 class TemporalFilter {
@@ -41,6 +44,7 @@ class TemporalFilter {
     uint32_t history = 0;  // bit k: seen k frames ago
     int missed = 0;
     bool confirmed = false;
+    double lag = 0.0;  // FilteredBlock::lag
   };
   TemporalFilterConfig config_;
   std::vector<Track> tracks_;
