@@ -166,6 +166,75 @@ double stable_margin(const ContactGraph& g, const std::vector<double>& contact_f
   return std::clamp(r.x[static_cast<size_t>(delta)], 0.0, kMaxMargin);
 }
 
+// The O(n) shortcut of the margin LP: the same certificate (totals F, moments m, budgets B = delta b) built
+// greedily top-down instead of optimised. Each block puts its load (its weight plus what it carries, at its
+// centre of pressure) on the midpoints of its outermost two supports by the lever rule, or, when the centre of
+// pressure is not between them, on the one support that contains it; its budget (1 + what it carries) is
+// split in proportion to the forces. Returns the largest uniform delta this certificate proves (-1: none).
+double stable_margin_greedy(const ContactGraph& g) {
+  const size_t k_count = g.contacts.size();
+  std::vector<double> force(k_count, 0.0), moment(k_count, 0.0), budget(k_count, 0.0);
+  double margin = kMaxMargin;
+  auto limit = [&](size_t k) {  // what contact k allows, given its force, point and budget
+    const Contact& c = g.contacts[k];
+    const double f = force[k];
+    if (f <= 0.0) return;
+    const double p = moment[k] / f;
+    const double lo_moves = end_owner(g, c.upper, c.lower, 0) == kSurface ? 0.0 : 1.0;
+    const double hi_moves = end_owner(g, c.upper, c.lower, 1) == kSurface ? 0.0 : 1.0;
+    margin = std::min(margin, f * (p - c.left) / (budget[k] + f * lo_moves));
+    margin = std::min(margin, f * (c.right - p) / (budget[k] + f * hi_moves));
+  };
+  for (int r = g.num_rows() - 1; r >= 0 && margin > 0.0; --r) {
+    for (int i : g.rows[static_cast<size_t>(r)]) {
+      const auto& sup = g.supports[static_cast<size_t>(i)];
+      if (sup.empty()) return -1.0;
+      double load = 1.0;
+      double torque = g.centre(i);
+      double need = 1.0;
+      for (int k : g.carries[static_cast<size_t>(i)]) {
+        load += force[static_cast<size_t>(k)];
+        torque += moment[static_cast<size_t>(k)];
+        need += budget[static_cast<size_t>(k)];
+      }
+      const double pressure = torque / load;
+      const size_t kl = static_cast<size_t>(sup.front());
+      const size_t kr = static_cast<size_t>(sup.back());
+      const double ml = 0.5 * (g.contacts[kl].left + g.contacts[kl].right);
+      const double mr = 0.5 * (g.contacts[kr].left + g.contacts[kr].right);
+      if (kl != kr && pressure >= ml && pressure <= mr && mr - ml > kContactTolerance) {
+        const double fl = load * (mr - pressure) / (mr - ml);
+        force[kl] = fl;
+        force[kr] = load - fl;
+        moment[kl] = fl * ml;
+        moment[kr] = (load - fl) * mr;
+        budget[kl] = need * fl / load;
+        budget[kr] = need * (load - fl) / load;
+        limit(kl);
+        limit(kr);
+        continue;
+      }
+      // One support: the one that holds the centre of pressure deepest inside.
+      size_t best = k_count;
+      double depth = 0.0;
+      for (int k : sup) {
+        const Contact& c = g.contacts[static_cast<size_t>(k)];
+        const double d = std::min(pressure - c.left, c.right - pressure);
+        if (d > depth) {
+          depth = d;
+          best = static_cast<size_t>(k);
+        }
+      }
+      if (best == k_count) return -1.0;
+      force[best] = load;
+      moment[best] = torque;
+      budget[best] = need;
+      limit(best);
+    }
+  }
+  return margin > 0.0 ? margin : -1.0;
+}
+
 // Whether every placement with block i within u_i of its measured x is balanced, with the contact forces
 // free (the same LP with F variable and the uncertainty fixed). On success, the totals per contact.
 bool stable_for(const ContactGraph& g, const std::vector<double>& u, const std::string& solver,
@@ -436,6 +505,12 @@ KnifeEdgeVerdict judge_knife_edge(const Stack& stack, const std::vector<double>&
     return out;
   }
   if (out.nominal.balanced) {
+    const double quick = stable_margin_greedy(g);
+    if (quick >= out.uncertainty && quick >= 0.0) {
+      out.certainty = Certainty::kStable;
+      out.margin = quick;
+      return out;
+    }
     Accelerations rest;
     try {
       rest = initial_accelerations(g, {}, options.qp);
@@ -446,7 +521,8 @@ KnifeEdgeVerdict judge_knife_edge(const Stack& stack, const std::vector<double>&
     }
     std::vector<double> force(g.contacts.size(), 0.0);
     for (size_t k = 0; k < force.size() && 2 * k + 1 < rest.force.size(); ++k) force[k] = rest.force[2 * k] + rest.force[2 * k + 1];
-    const double margin = rest.any_moving() ? -1.0 : stable_margin(g, force, solver, out.linear_programs);
+    const double margin =
+        std::max(quick, rest.any_moving() ? -1.0 : stable_margin(g, force, solver, out.linear_programs));
     if (margin >= out.uncertainty && margin >= 0.0) {
       out.certainty = Certainty::kStable;
       out.margin = margin;
