@@ -127,64 +127,27 @@ void add_block_rows(const ContactGraph& g, opt::Problem& p, const StaticsVars& v
   }
 }
 
-// The largest uniform uncertainty delta for which the given contact forces (totals per contact, from the
-// measured pile's statics) prove every placement balanced; -1 when they prove nothing. An LP in (m, B, delta):
-//   m_k - B_k - delta F_k >= F_k lo_k,   -m_k - B_k - delta F_k >= -F_k hi_k
-// (every point of action, moved by up to B_k / F_k, stays inside the contact interval shrunk by delta).
-double stable_margin(const ContactGraph& g, const std::vector<double>& contact_force, const std::string& solver,
-                     int& lps) {
-  opt::Problem p;
-  StaticsVars v;
-  const size_t k_count = g.contacts.size();
-  v.moment.resize(k_count);
-  v.budget.resize(k_count);
-  for (size_t k = 0; k < k_count; ++k) {
-    // Bounded, not free: CLP's dual simplex reports free columns without a starting basis as infeasible.
-    const double f = contact_force[k] > kNoForce ? contact_force[k] : 0.0;
-    v.moment[k] = p.add_variable(f * g.contacts[k].left, f * g.contacts[k].right, 0.0);
-    v.budget[k] = p.add_variable(0.0, opt::kInfinity, 0.0);
-  }
-  const int delta = p.add_variable(0.0, kMaxMargin, -1.0);
-  add_block_rows(g, p, v, nullptr, delta);
-  for (size_t k = 0; k < k_count; ++k) {
-    const double f = contact_force[k] > kNoForce ? contact_force[k] : 0.0;
-    const Contact& c = g.contacts[k];
-    const double moves_left = end_owner(g, c.upper, c.lower, 0) == kSurface ? 0.0 : 1.0;
-    const double moves_right = end_owner(g, c.upper, c.lower, 1) == kSurface ? 0.0 : 1.0;
-    const int left = p.add_row(f * c.left, opt::kInfinity);
-    p.set(left, v.moment[k], 1.0);
-    p.set(left, v.budget[k], -1.0);
-    if (moves_left > 0.0 && f > 0.0) p.set(left, delta, -f);
-    const int right = p.add_row(-f * c.right, opt::kInfinity);
-    p.set(right, v.moment[k], -1.0);
-    p.set(right, v.budget[k], -1.0);
-    if (moves_right > 0.0 && f > 0.0) p.set(right, delta, -f);
-  }
-  ++lps;
-  opt::SolveResult r;
-  if (!solve(p, solver, "knife edge (stable margin)", r)) return -1.0;
-  return std::clamp(r.x[static_cast<size_t>(delta)], 0.0, kMaxMargin);
-}
-
-// The O(n) shortcut of the margin LP: the same certificate (totals F, moments m, budgets B = delta b) built
-// greedily top-down instead of optimised. Each block puts its load (its weight plus what it carries, at its
-// centre of pressure) on the midpoints of its outermost two supports by the lever rule, or, when the centre of
-// pressure is not between them, on the one support that contains it; its budget (1 + what it carries) is
-// split in proportion to the forces. Returns the largest uniform delta this certificate proves (-1: none).
+// The stable margin, O(n): the stability LP's certificate (totals F, moments m, budgets B = delta b) built
+// greedily top-down for a uniform delta instead of optimised. Each block puts its load (its weight plus what
+// it carries, at its centre of pressure) either on one support, at the centre of pressure, or on two supports
+// at their midpoints by the lever rule, whichever of these choices lets its own contacts take the largest
+// delta; its budget (1 + what it carries) is split in proportion to the forces. Returns the largest uniform
+// delta this certificate proves (-1: none).
 double stable_margin_greedy(const ContactGraph& g) {
   const size_t k_count = g.contacts.size();
   std::vector<double> force(k_count, 0.0), moment(k_count, 0.0), budget(k_count, 0.0);
-  double margin = kMaxMargin;
-  auto limit = [&](size_t k) {  // what contact k allows, given its force, point and budget
+  std::vector<double> lo_moves(k_count), hi_moves(k_count);
+  for (size_t k = 0; k < k_count; ++k) {
     const Contact& c = g.contacts[k];
-    const double f = force[k];
-    if (f <= 0.0) return;
-    const double p = moment[k] / f;
-    const double lo_moves = end_owner(g, c.upper, c.lower, 0) == kSurface ? 0.0 : 1.0;
-    const double hi_moves = end_owner(g, c.upper, c.lower, 1) == kSurface ? 0.0 : 1.0;
-    margin = std::min(margin, f * (p - c.left) / (budget[k] + f * lo_moves));
-    margin = std::min(margin, f * (c.right - p) / (budget[k] + f * hi_moves));
+    lo_moves[k] = end_owner(g, c.upper, c.lower, 0) == kSurface ? 0.0 : 1.0;
+    hi_moves[k] = end_owner(g, c.upper, c.lower, 1) == kSurface ? 0.0 : 1.0;
+  }
+  // What contact k allows with force f at point p and budget b.
+  auto allows = [&](size_t k, double f, double p, double b) {
+    const Contact& c = g.contacts[k];
+    return std::min(f * (p - c.left) / (b + f * lo_moves[k]), f * (c.right - p) / (b + f * hi_moves[k]));
   };
+  double margin = kMaxMargin;
   for (int r = g.num_rows() - 1; r >= 0 && margin > 0.0; --r) {
     for (int i : g.rows[static_cast<size_t>(r)]) {
       const auto& sup = g.supports[static_cast<size_t>(i)];
@@ -198,38 +161,51 @@ double stable_margin_greedy(const ContactGraph& g) {
         need += budget[static_cast<size_t>(k)];
       }
       const double pressure = torque / load;
-      const size_t kl = static_cast<size_t>(sup.front());
-      const size_t kr = static_cast<size_t>(sup.back());
-      const double ml = 0.5 * (g.contacts[kl].left + g.contacts[kl].right);
-      const double mr = 0.5 * (g.contacts[kr].left + g.contacts[kr].right);
-      if (kl != kr && pressure >= ml && pressure <= mr && mr - ml > kContactTolerance) {
-        const double fl = load * (mr - pressure) / (mr - ml);
-        force[kl] = fl;
-        force[kr] = load - fl;
-        moment[kl] = fl * ml;
-        moment[kr] = (load - fl) * mr;
-        budget[kl] = need * fl / load;
-        budget[kr] = need * (load - fl) / load;
-        limit(kl);
-        limit(kr);
-        continue;
-      }
-      // One support: the one that holds the centre of pressure deepest inside.
-      size_t best = k_count;
-      double depth = 0.0;
-      for (int k : sup) {
-        const Contact& c = g.contacts[static_cast<size_t>(k)];
-        const double d = std::min(pressure - c.left, c.right - pressure);
-        if (d > depth) {
-          depth = d;
-          best = static_cast<size_t>(k);
+      double best = -1.0;
+      size_t ba = k_count, bb = k_count;
+      double fa = 0.0;
+      for (size_t x = 0; x < sup.size(); ++x) {
+        const size_t ka = static_cast<size_t>(sup[x]);
+        const double one = allows(ka, load, pressure, need);
+        if (one > best) {
+          best = one;
+          ba = ka;
+          bb = k_count;
+          fa = load;
+        }
+        const double ma = 0.5 * (g.contacts[ka].left + g.contacts[ka].right);
+        for (size_t y = x + 1; y < sup.size(); ++y) {
+          const size_t kb = static_cast<size_t>(sup[y]);
+          const double mb = 0.5 * (g.contacts[kb].left + g.contacts[kb].right);
+          if (!(mb - ma > kContactTolerance) || pressure < ma || pressure > mb) continue;
+          const double f1 = load * (mb - pressure) / (mb - ma);
+          const double f2 = load - f1;
+          const double both = std::min(f1 > 0.0 ? allows(ka, f1, ma, need * f1 / load) : kMaxMargin,
+                                       f2 > 0.0 ? allows(kb, f2, mb, need * f2 / load) : kMaxMargin);
+          if (both > best) {
+            best = both;
+            ba = ka;
+            bb = kb;
+            fa = f1;
+          }
         }
       }
-      if (best == k_count) return -1.0;
-      force[best] = load;
-      moment[best] = torque;
-      budget[best] = need;
-      limit(best);
+      if (!(best > 0.0)) return -1.0;
+      margin = std::min(margin, best);
+      if (bb == k_count) {
+        force[ba] = load;
+        moment[ba] = torque;
+        budget[ba] = need;
+        continue;
+      }
+      const double ma = 0.5 * (g.contacts[ba].left + g.contacts[ba].right);
+      const double mb = 0.5 * (g.contacts[bb].left + g.contacts[bb].right);
+      force[ba] = fa;
+      force[bb] = load - fa;
+      moment[ba] = fa * ma;
+      moment[bb] = (load - fa) * mb;
+      budget[ba] = need * fa / load;
+      budget[bb] = need * (load - fa) / load;
     }
   }
   return margin > 0.0 ? margin : -1.0;
@@ -511,29 +487,15 @@ KnifeEdgeVerdict judge_knife_edge(const Stack& stack, const std::vector<double>&
       out.margin = quick;
       return out;
     }
-    Accelerations rest;
-    try {
-      rest = initial_accelerations(g, {}, options.qp);
-    } catch (const std::invalid_argument&) {
-      throw;
-    } catch (const std::runtime_error& e) {
-      throw SolverError(e.what());
-    }
-    std::vector<double> force(g.contacts.size(), 0.0);
-    for (size_t k = 0; k < force.size() && 2 * k + 1 < rest.force.size(); ++k) force[k] = rest.force[2 * k] + rest.force[2 * k + 1];
-    const double margin =
-        std::max(quick, rest.any_moving() ? -1.0 : stable_margin(g, force, solver, out.linear_programs));
-    if (margin >= out.uncertainty && margin >= 0.0) {
-      out.certainty = Certainty::kStable;
-      out.margin = margin;
-      return out;
-    }
+    // One LP: the forces re-chosen for the per-block uncertainties. Its margin is at least u; the greedy's
+    // may be larger.
     std::vector<double> robust;
     if (stable_for(g, uncertainty, solver, robust, out.linear_programs)) {
       out.certainty = Certainty::kStable;
-      out.margin = std::max(out.uncertainty, stable_margin(g, robust, solver, out.linear_programs));
+      out.margin = std::max(out.uncertainty, quick);
       return out;
     }
+    const double margin = quick;
     out.certainty = Certainty::kKnifeEdge;
     out.margin = std::max(0.0, margin);
     out.deciding = deciding_if_it_falls(stack, g, out.uncertainty, options.qp);
