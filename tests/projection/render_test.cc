@@ -12,7 +12,7 @@
 
 #include "bricklayer/board/board_geometry.h"
 #include "bricklayer/projection/display.h"
-#include "bricklayer/projection/projection_app.h"
+#include "bricklayer/projection/projection_node.h"
 
 using namespace bricklayer;
 using namespace bricklayer::projection;

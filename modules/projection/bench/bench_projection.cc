@@ -1,6 +1,6 @@
 // bricklayer-bench-projection: prediction received -> frame presented, in bricklayer-projection's own
-// loop (ProjectionApp), headless (SDL's offscreen driver, software renderer, no vsync), on an
-// in-process LCM bus (memq://) so only the projection's own work is timed: decode, scene update,
+// node (ProjectionNode), headless (SDL's offscreen driver, software renderer, no vsync), on the
+// runtime's in-process bus so only the projection's own work is timed: decode, scene update,
 // drawing the blocks, HUD and miniature into the projector-size frame, and presenting it.
 // Each iteration publishes a stack and its prediction (the colours change every frame) and steps the
 // loop once. projector_state_t capture (at most --state-hz) runs after the present, as in the process.
@@ -10,7 +10,9 @@
 
 #include "bricklayer/common/flags.h"
 #include "bricklayer/common/log.h"
-#include "bricklayer/projection/projection_app.h"
+#include "bricklayer/projection/projection_node.h"
+#include "bricklayer/runtime/codec.h"
+#include "bricklayer/runtime/in_process_bus.h"
 
 namespace {
 
@@ -29,14 +31,19 @@ int Main(int argc, char** argv) {
   const int frames = static_cast<int>(flags.get_int("frames"));
   if (blocks < 1 || frames < 1) throw FlagError("--blocks and --frames must be positive");
 
-  projection::ProjectionOptions options;
-  options.lcm_url = "memq://";
-  options.display.mode = projection::DisplayMode::kHeadless;
-  options.display.width = static_cast<int>(flags.get_int("width"));
-  options.display.height = static_cast<int>(flags.get_int("height"));
-  options.state_max_hz = flags.get_double("state-hz");
-  options.mute = true;
-  projection::ProjectionApp app(options);
+  projection::ProjectionConfig config;
+  config.headless = true;
+  config.width = static_cast<int>(flags.get_int("width"));
+  config.height = static_cast<int>(flags.get_int("height"));
+  config.state_hz = flags.get_double("state-hz");
+  config.mute = true;
+  runtime::InProcessBus hub;
+  runtime::Bus& peer = hub.endpoint("bench");
+  projection::ProjectionNode node(config, hub.endpoint("projection"));
+  auto send = [&peer](const char* channel, const auto& msg) {
+    const std::vector<uint8_t> bytes = runtime::encode(msg);
+    peer.publish(channel, bytes.data(), bytes.size());
+  };
 
   // A wall: rows of 3 blocks, staggered by half a block, 1 block over the edge.
   stack_t stack{};
@@ -70,11 +77,12 @@ int Main(int argc, char** argv) {
     prediction.utime = stack.utime;
     for (int i = 0; i < blocks; ++i) prediction.blocks[i].state = static_cast<int8_t>((i + f) % 3);
     prediction.balanced = false;
-    app.module().publish("BL_STACK", stack);
-    app.module().publish("BL_PREDICTION", prediction);
-    app.step(0);
+    send("BL_STACK", stack);
+    send("BL_PREDICTION", prediction);
+    node.step(0);
+    hub.advance(33333);  // the camera's frame period on the node's clock (state rate, staleness)
   }
-  std::vector<int64_t> lat = app.present_latencies_us();
+  std::vector<int64_t> lat = node.present_latencies_us();
   if (lat.size() < static_cast<size_t>(total)) {
     std::fprintf(stderr, "only %zu of %d predictions were presented\n", lat.size(), total);
     return 1;
@@ -83,7 +91,7 @@ int Main(int argc, char** argv) {
   std::sort(lat.begin(), lat.end());
   auto at = [&](double q) { return lat[std::min(lat.size() - 1, static_cast<size_t>(q * (lat.size() - 1) + 0.5))] / 1000.0; };
   std::printf("projection, %d blocks, %dx%d, offscreen driver (software renderer), %zu frames\n", blocks,
-              options.display.width, options.display.height, lat.size());
+              config.width, config.height, lat.size());
   std::printf("prediction received -> frame presented: median %.3f ms, p99 %.3f ms, max %.3f ms\n", at(0.5),
               at(0.99), lat.back() / 1000.0);
   return 0;

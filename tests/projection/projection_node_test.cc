@@ -1,0 +1,223 @@
+// ProjectionNode on the in-process rig: the whole module (bus, rounds, round book, staleness, drawing)
+// on a clock that moves only when the test steps it, so every moment is exact: a round starts the
+// instant the hold is over, ends exactly at its duration, a node built again on the same round book
+// (a restart) runs the same round on, stale inputs turn the heartbeat and the drawn blocks, and bad
+// configurations are refused.
+#include <catch2/catch.hpp>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include "bricklayer/board/board_to_projector.h"
+#include "bricklayer/common/channels.h"
+#include "bricklayer/projection/projection_node.h"
+#include "bricklayer/projector_state_t.hpp"
+#include "bricklayer/round_t.hpp"
+#include "harness/rig.h"
+#include "harness/scratch.h"
+
+using namespace bricklayer;
+using namespace bricklayer::projection;
+using namespace std::chrono_literals;
+
+namespace {
+
+constexpr int64_t kStepUs = 10'000;
+constexpr int64_t kS = 1'000'000;
+
+ProjectionConfig quick_config(const std::string& rounds_file) {
+  ProjectionConfig c;
+  c.headless = true;
+  c.mute = true;
+  c.rounds_file = rounds_file;
+  c.round_seconds = 5;
+  c.round_start_hold = 2;
+  c.round_arm_empty = 1;
+  c.round_end_empty = 3;
+  c.stale_seconds = 1;
+  return c;
+}
+
+struct Camera {
+  harness::Rig& rig;
+  int64_t frame = 0;
+  bool pile = false;
+  bool balanced = true;
+  bool predictions = true;
+
+  // One stack (and its prediction) now, as vision and prediction would answer.
+  void send() {
+    ++frame;
+    bricklayer::stack_t s{};
+    s.utime = rig.now();
+    s.frame_number = frame;
+    s.block_length = 1;
+    s.block_height = 1.0 / 3.0;
+    s.status = bricklayer::stack_t::STATUS_OK;
+    prediction_t p{};
+    p.utime = s.utime;
+    p.frame_number = frame;
+    p.status = prediction_t::STATUS_OK;
+    p.balanced = true;
+    if (pile) {
+      for (auto [id, row, x] : {std::tuple<int64_t, int, double>{1, 0, -0.8}, {2, 1, -0.7}}) {
+        block_t b{};
+        b.id = id;
+        b.row = row;
+        b.x = x;
+        b.confidence = 1;
+        s.blocks.push_back(b);
+        block_prediction_t bp{};
+        bp.id = id;
+        bp.state = balanced || id == 1 ? block_prediction_t::STATE_STABLE : block_prediction_t::STATE_CAUSE;
+        p.blocks.push_back(bp);
+      }
+      p.balanced = balanced;
+      p.score = 30;
+    }
+    s.num_blocks = static_cast<int32_t>(s.blocks.size());
+    p.num_blocks = static_cast<int32_t>(p.blocks.size());
+    rig.publish(channel(kStackChannel), s);
+    if (predictions) rig.publish(channel(kPredictionChannel), p);
+  }
+  // Stacks at 10 Hz for this long (rig time).
+  void run(int64_t us) {
+    const int64_t end = rig.now() + us;
+    while (rig.now() < end) {
+      send();
+      for (int k = 0; k < 10; ++k) rig.step();
+    }
+  }
+};
+
+}  // namespace
+
+TEST_CASE("on the rig a round starts the instant the hold is over and ends exactly at its duration") {
+  harness::ScratchDir dir("projection-node");
+  harness::Rig rig(kStepUs);
+  auto& node = rig.add<ProjectionNode>(quick_config((dir / "rounds.json").string()));
+  auto& rec = rig.record({channel(kRoundChannel)});
+  Camera cam{rig};
+  cam.run(2 * kS);  // an empty board: armed
+  CHECK(node.round().state() == RoundState::kIdle);
+  cam.pile = true;
+  const int64_t placed = rig.now();
+  cam.run(3 * kS);
+  const auto running = rec.wait_for<round_t>(channel(kRoundChannel), [](const round_t& r) { return r.state == round_t::STATE_RUNNING; }, 0ms);
+  REQUIRE(running);
+  CHECK(running->utime == placed + 2 * kS);  // not a step earlier or later
+  CHECK(running->remaining_ms == 5000);
+  REQUIRE(node.round().running());
+  CHECK(node.round().running()->start_utime == placed + 2 * kS);
+  CHECK(node.round().max_score() == 30);
+
+  cam.run(4500 * 1000);
+  const auto ended = rec.wait_for<round_t>(channel(kRoundChannel), [](const round_t& r) { return r.state == round_t::STATE_ENDED; }, 0ms);
+  REQUIRE(ended);
+  CHECK(ended->utime == placed + 7 * kS);
+  CHECK(ended->max_score == 30);
+  const nlohmann::json book = nlohmann::json::parse(harness::read_file(dir / "rounds.json"));
+  REQUIRE(book["rounds"].size() == 1);
+  CHECK(book["rounds"][0]["start_utime"] == placed + 2 * kS);
+  CHECK(book["rounds"][0]["end_utime"] == placed + 7 * kS);
+  CHECK(book["rounds"][0]["end"] == "time up");
+  CHECK(book["rounds"][0]["blocks"] == 2);
+}
+
+TEST_CASE("on the rig a node built again on the same round book runs the same round on") {
+  harness::ScratchDir dir("projection-node-restart");
+  const std::string file = (dir / "rounds.json").string();
+  int64_t started = 0;
+  {
+    harness::Rig rig(kStepUs);
+    auto& node = rig.add<ProjectionNode>(quick_config(file));
+    Camera cam{rig};
+    cam.run(2 * kS);
+    cam.pile = true;
+    cam.run(2500 * 1000);
+    REQUIRE(node.round().state() == RoundState::kRunning);
+    started = node.round().running()->start_utime;
+  }  // gone without a word, as a process killed with -9
+  harness::Rig rig(kStepUs, started + 3 * kS);  // back 3 s into the round
+  auto& node = rig.add<ProjectionNode>(quick_config(file));
+  auto& rec = rig.record({channel(kRoundChannel)});
+  rig.step();
+  const auto r = rec.wait_for<round_t>(channel(kRoundChannel), {}, 0ms);
+  REQUIRE(r);
+  CHECK(r->state == round_t::STATE_RUNNING);
+  CHECK(r->max_score == 30);
+  CHECK(r->remaining_ms == 2000 - kStepUs / 1000);
+  CHECK(node.round().running()->start_utime == started);
+  // It still ends on time, by its original start.
+  Camera cam{rig};
+  cam.pile = true;
+  cam.run(2 * kS);
+  REQUIRE(node.round().last_round());
+  CHECK(node.round().last_round()->end_utime == started + 5 * kS);
+}
+
+TEST_CASE("on the rig stale inputs turn the heartbeat and take the verdict colours off the blocks") {
+  harness::Rig rig(kStepUs);
+  auto& node = rig.add<ProjectionNode>(quick_config(""));
+  auto& rec = rig.record({channel(kHeartbeatChannel), channel(kProjectorChannel)});
+  Camera cam{rig};
+  cam.pile = true;
+  cam.balanced = false;  // the top block is the cause: red
+  cam.run(2 * kS);
+  CHECK(node.input_problem() == InputProblem::kNone);
+  auto red_drawn = [&rec](bool red) {
+    const auto states = rec.all<projector_state_t>(channel(kProjectorChannel));
+    REQUIRE_FALSE(states.empty());
+    const cv::Mat image = cv::imdecode(states.back().image.data, cv::IMREAD_COLOR);
+    REQUIRE(image.cols == 256);
+    const board::Point2 top = board::BoardToProjector{}.map(-0.7 + 0.5, 1.5 / 3.0);
+    const cv::Vec3b px = image.at<cv::Vec3b>(static_cast<int>(top.y / 4), static_cast<int>(top.x / 4));
+    INFO("the cause's pixel BGR " << px);
+    CHECK((px[2] > 150) == red);
+    CHECK(px[1] == 0);
+  };
+  red_drawn(true);
+
+  rec.clear();
+  const int64_t last_stack = rig.now() - 10 * kStepUs;
+  rig.run_until([&] { return node.input_problem() != InputProblem::kNone; }, 3s);
+  CHECK(node.input_problem() == InputProblem::kCameraNotSeeing);
+  CHECK(rig.now() == last_stack + kS + kStepUs);  // the first step past the limit
+  const auto hb = rec.wait_for_heartbeat("projection", [](const heartbeat_t& h) { return h.status != "ok"; }, 2s);
+  REQUIRE(hb);
+  CHECK(hb->status.rfind("camera not seeing: no stacks for", 0) == 0);
+  red_drawn(false);
+
+  cam.predictions = false;
+  rec.clear();
+  cam.run(2 * kS);
+  CHECK(node.input_problem() == InputProblem::kWaitingForOtherMachine);
+  const auto hb2 = rec.wait_for_heartbeat("projection", [](const heartbeat_t& h) { return h.status != "ok"; }, 0ms);
+  REQUIRE(hb2);
+  CHECK(hb2->status.rfind("waiting for the other machine: no predictions for", 0) == 0);
+  cam.predictions = true;
+  cam.run(1 * kS);
+  CHECK(node.input_problem() == InputProblem::kNone);
+  red_drawn(true);
+}
+
+TEST_CASE("the projection's configuration is checked before anything opens") {
+  harness::Rig rig(kStepUs);
+  ProjectionConfig c = quick_config("");
+  c.window = true;  // and headless
+  CHECK_THROWS_AS(rig.add<ProjectionNode>(c), std::invalid_argument);
+  c = quick_config("");
+  c.round_seconds = 0;
+  CHECK_THROWS_AS(rig.add<ProjectionNode>(c), std::invalid_argument);
+  c = quick_config("");
+  c.display = "x";
+  c.headless = false;
+  CHECK_THROWS_AS(rig.add<ProjectionNode>(c), std::invalid_argument);
+  c = quick_config("");
+  c.snapshot_every = 2;
+  CHECK_THROWS_AS(rig.add<ProjectionNode>(c), std::invalid_argument);
+  c = quick_config("");
+  c.state_width = 2000;
+  CHECK_THROWS_AS(rig.add<ProjectionNode>(c), std::invalid_argument);
+}
