@@ -245,3 +245,29 @@ TEST_CASE("waiting for a camera that is not there prints its reason once, not a 
   CHECK(text.find("waiting for camera 57") != std::string::npos);
   fs::remove_all(dir);
 }
+
+TEST_CASE("a looping folder with a corrupt image counts it at every pass and says so once") {
+  const fs::path dir = temp_dir("corrupt");
+  cv::imwrite((dir / "a.png").string(), numbered_frame(1));
+  std::ofstream(dir / "b.png") << "corrupt";
+  launcher::SpawnOptions o;
+  o.stdout_path = (dir / "out").string();
+  o.merge_stderr = true;
+  const fs::path images = dir;
+  auto camera = launcher::Process::spawn({kBin, "--images", images.string(), "--loop", "--fps", "30", "--lcm-url", kUrl}, o);
+  Module m("test", kUrl);
+  std::vector<heartbeat_t> beats;
+  m.subscribe<heartbeat_t>(channel(kHeartbeatChannel), [&](const heartbeat_t& hb) { beats.push_back(hb); });
+  heartbeat_t hb{};
+  REQUIRE(camera_heartbeat(m, beats, camera.pid(), hb, 6, [](const heartbeat_t& h) { return h.uptime_us > 2'500'000; }));
+  CHECK(hb.errors > 20);  // about 15 passes a second, each counting the corrupt image
+  camera.stop(std::chrono::seconds(5));
+  std::ifstream in(dir / "out");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  INFO(text);
+  size_t said = 0;
+  for (size_t at = text.find("skipping unreadable image"); at != std::string::npos; at = text.find("skipping unreadable image", at + 1))
+    ++said;
+  CHECK(said == 1);
+  fs::remove_all(dir);
+}

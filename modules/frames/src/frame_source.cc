@@ -1,6 +1,7 @@
 #include "bricklayer/frames/frame_source.h"
 
 #include <algorithm>
+#include <set>
 #include <stdexcept>
 
 #include <opencv2/imgcodecs.hpp>
@@ -92,7 +93,9 @@ class FolderSource final : public FrameSource {
       frame = cv::imread(file.string(), cv::IMREAD_COLOR);
       if (!frame.empty()) return true;
       ++unreadable_;
-      log::warn("skipping unreadable image ", file.string());
+      // Once per file: a looping folder would otherwise say it again at every pass (30 lines a second).
+      if (warned_.insert(file).second)
+        log::warn("skipping unreadable image ", file.string(), " (counted at every pass; said once)");
     }
     return false;
   }
@@ -110,6 +113,7 @@ class FolderSource final : public FrameSource {
   bool loop_;
   size_t index_ = 0;
   int64_t unreadable_ = 0;
+  std::set<fs::path> warned_;
 };
 
 }  // namespace
