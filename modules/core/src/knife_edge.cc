@@ -133,7 +133,7 @@ void add_block_rows(const ContactGraph& g, opt::Problem& p, const StaticsVars& v
 // at their midpoints by the lever rule, whichever of these choices lets its own contacts take the largest
 // delta; its budget (1 + what it carries) is split in proportion to the forces. Returns the largest uniform
 // delta this certificate proves (-1: none).
-double stable_margin_greedy(const ContactGraph& g) {
+double stable_margin_greedy(const ContactGraph& g, int* limiting = nullptr) {
   const size_t k_count = g.contacts.size();
   std::vector<double> force(k_count, 0.0), moment(k_count, 0.0), budget(k_count, 0.0);
   std::vector<double> lo_moves(k_count), hi_moves(k_count);
@@ -190,6 +190,7 @@ double stable_margin_greedy(const ContactGraph& g) {
           }
         }
       }
+      if (limiting != nullptr && best < margin) *limiting = i;
       if (!(best > 0.0)) return -1.0;
       margin = std::min(margin, best);
       if (bb == k_count) {
@@ -209,6 +210,24 @@ double stable_margin_greedy(const ContactGraph& g) {
     }
   }
   return margin > 0.0 ? margin : -1.0;
+}
+
+// A witness against a certain verdict, without an LP: the pile sheared at a row (every block of that row and
+// above moved by +-u_i, every block below by -+u_i, both ways). Returns true when one of the two placements
+// is valid and its exact verdict is `balanced` -- then the pile is a knife edge for sure.
+bool sheared_placement_is(const Stack& stack, const ContactGraph& g, int row, const std::vector<double>& u,
+                          const PredictOptions& options, bool balanced) {
+  for (double s : {1.0, -1.0}) {
+    Stack t = stack;
+    for (size_t i = 0; i < t.blocks.size(); ++i) {
+      t.blocks[i].x += (g.row[i] >= row ? s : -s) * u[i] * stack.block_length;
+    }
+    try {
+      if (predict(t, options).balanced == balanced) return true;
+    } catch (const StackError&) {  // the shear pushed two blocks of a row into each other: no placement
+    }
+  }
+  return false;
 }
 
 // Whether every placement with block i within u_i of its measured x is balanced, with the contact forces
@@ -481,10 +500,18 @@ KnifeEdgeVerdict judge_knife_edge(const Stack& stack, const std::vector<double>&
     return out;
   }
   if (out.nominal.balanced) {
-    const double quick = stable_margin_greedy(g);
+    int limiting = -1;
+    const double quick = stable_margin_greedy(g, &limiting);
     if (quick >= out.uncertainty && quick >= 0.0) {
       out.certainty = Certainty::kStable;
       out.margin = quick;
+      return out;
+    }
+    // A placement that falls, sheared where the greedy certificate is tightest, settles it without an LP.
+    if (limiting >= 0 && sheared_placement_is(stack, g, g.row[static_cast<size_t>(limiting)], uncertainty, options, false)) {
+      out.certainty = Certainty::kKnifeEdge;
+      out.margin = std::max(0.0, quick);
+      out.deciding = deciding_if_it_falls(stack, g, out.uncertainty, options.qp);
       return out;
     }
     // One LP: the forces re-chosen for the per-block uncertainties. Its margin is at least u; the greedy's
@@ -517,6 +544,16 @@ KnifeEdgeVerdict judge_knife_edge(const Stack& stack, const std::vector<double>&
   if (cut.proved_for_u) {
     out.certainty = Certainty::kFalls;
     out.margin = -std::max(out.uncertainty, cut.uniform);
+    return out;
+  }
+  // A placement that stands, sheared at the lowest row of causes, settles it without an LP.
+  int cause_row = g.num_rows();
+  for (size_t i = 0; i < g.size(); ++i) {
+    if (out.nominal.blocks[i].state == BlockState::kCause) cause_row = std::min(cause_row, g.row[i]);
+  }
+  if (cause_row < g.num_rows() && sheared_placement_is(stack, g, cause_row, uncertainty, options, true)) {
+    out.certainty = Certainty::kKnifeEdge;
+    out.margin = -std::max(0.0, cut.uniform);
     return out;
   }
   const double margin = std::max(cut.uniform, falls_margin(g, accel, alpha, solver, out.linear_programs));
