@@ -101,3 +101,46 @@ TEST_CASE("a late observer catches up on both hosts' whole state from one host_s
   a.signal(SIGTERM);
   REQUIRE(a.wait_for(15s));
 }
+
+TEST_CASE("a host whose launcher goes silent is missed in the other host's status, one stopped on purpose is not") {
+  test::TempDir dir("peers");
+  auto camera_profile = dir.write("camera.json", R"({"modules":[
+      {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]}]})");
+  auto projector_profile = dir.write("projector.json", R"({"modules":[
+      {"name":"sleeper","command":["/bin/sleep","60"],"heartbeat":""}]})");
+  auto a = test::launch(dir, camera_profile, {"--host-name", "camera-host"}, "a");
+  auto b = test::launch(dir, projector_profile, {"--host-name", "projector-host"}, "b");
+  test::Listener bus;
+  REQUIRE(bus.ok());
+  bus.listen(channel(launcher::kHostStateChannel));
+  auto camera_status = [&] {
+    std::string status;
+    for (const auto& m : bus.on(channel(launcher::kHostStateChannel))) {
+      host_state_t hs{};
+      if (test::decode(m.bytes, hs) && hs.host == "camera-host") status = hs.status;
+    }
+    return status;
+  };
+  REQUIRE(bus.pump_until([&] { return dir.read("launcha.out").find("host projector-host (profile projector) is on the bus") != std::string::npos; }, 10s));
+  INFO(dir.read("launcha.out"));
+  // The projector host's launcher dies without a word (kill -9: no last message).
+  b.signal(SIGKILL);
+  REQUIRE(b.wait_for(5s));
+  bus.messages.clear();
+  REQUIRE(bus.pump_until([&] { return camera_status().find("no host state from projector-host for") != std::string::npos; }, 10s));
+  CHECK(camera_status().rfind("no host state from projector-host for ", 0) == 0);
+  CHECK(dir.read("launcha.out").find("no host state from projector-host for 5.0 s (the other machine off") != std::string::npos);
+
+  // Back: heard again, "ok"; then stopped on purpose (SIGTERM: its last message says stopped): not missed.
+  auto b2 = test::launch(dir, projector_profile, {"--host-name", "projector-host"}, "b2");
+  bus.messages.clear();
+  REQUIRE(bus.pump_until([&] { return camera_status() == "ok"; }, 10s));
+  CHECK(dir.read("launcha.out").find("host projector-host is heard again") != std::string::npos);
+  b2.signal(SIGTERM);
+  REQUIRE(b2.wait_for(15s));
+  bus.messages.clear();
+  bus.pump(7s);
+  CHECK(camera_status() == "ok");
+  a.signal(SIGTERM);
+  REQUIRE(a.wait_for(15s));
+}

@@ -41,6 +41,8 @@ std::chrono::microseconds seconds(double s) { return std::chrono::microseconds(s
 // The launcher's own heartbeat is heard back within a second on a working bus; after this long without
 // it the bus is deaf (an interface down, no route), and no module is judged by its silence.
 constexpr auto kDeafAfter = std::chrono::milliseconds(2500);
+// Another host's launcher publishes its state once a second; silent this long, it is missed.
+constexpr auto kPeerSilentAfter = std::chrono::seconds(5);
 
 }  // namespace
 
@@ -98,6 +100,8 @@ class Supervisor::SupervisorNode final : public runtime::Node {
     // Every module's heartbeat matters: a generous queue, not newest-wins.
     subscribe<heartbeat_t>(channel(kHeartbeatChannel), runtime::QueuePolicy::keep(4096),
                            [this](const heartbeat_t& hb) { owner_.HandleHeartbeat(hb); });
+    subscribe<host_state_t>(channel(kHostStateChannel), runtime::QueuePolicy::keep(256),
+                            [this](const host_state_t& hs) { owner_.HandleHostState(hs); });
     set_tick_ms(20);
   }
   using Node::publish_report;
@@ -210,6 +214,30 @@ void Supervisor::HandleHeartbeat(const heartbeat_t& hb) {
   }
 }
 
+void Supervisor::HandleHostState(const host_state_t& hs) {
+  if (hs.host == host_label_ && hs.launcher_pid == static_cast<int32_t>(::getpid())) return;  // our own
+  const bool stopped = hs.num_modules > 0 && std::all_of(hs.modules.begin(), hs.modules.end(), [](const module_state_t& m) {
+    return m.state == module_state_t::STATE_STOPPED;
+  });
+  auto [it, added] = peers_.try_emplace(hs.host);
+  if (added) say("host " + hs.host + " (profile " + hs.profile + ") is on the bus: " + hs.status);
+  else if (now_silent_.count(hs.host)) say("host " + hs.host + " is heard again: " + hs.status);
+  now_silent_.erase(hs.host);
+  it->second.last_seen = Clock::now();
+  it->second.stopped = stopped;
+}
+
+// "no host state from projector-host for 7 s", for every other host missed; "" when none.
+std::string Supervisor::silent_peers(Clock::time_point now) const {
+  std::string out;
+  for (const auto& [host, peer] : peers_) {
+    if (peer.stopped || now - peer.last_seen < kPeerSilentAfter) continue;
+    out += (out.empty() ? "" : "; ") + std::string("no host state from ") + host + " for " +
+           std::to_string(static_cast<int>(std::chrono::duration<double>(now - peer.last_seen).count())) + " s";
+  }
+  return out;
+}
+
 void Supervisor::ended(Managed& m, Clock::time_point now) {
   // The counters of the process that ended stay in the module's totals.
   if (m.has_beat) {
@@ -314,7 +342,14 @@ void Supervisor::tick() {
       say(std::to_string(host_state().modules_up) + " of " + std::to_string(managed_.size()) + " processes of profile " + profile_.name + " are up; down: " + down);
     }
   }
-  // 6. Duration.
+  // 6. Other hosts that went silent are said once (the status says it for as long as it lasts).
+  for (const auto& [host, peer] : peers_) {
+    if (peer.stopped || now - peer.last_seen < kPeerSilentAfter || now_silent_.count(host)) continue;
+    now_silent_.insert(host);
+    say("no host state from " + host + " for " + format_seconds(static_cast<double>(kPeerSilentAfter.count())) +
+        " s (the other machine off, or the link between us down?)");
+  }
+  // 7. Duration.
   if (options_.duration_s > 0 && since_start(now) >= options_.duration_s) {
     say("duration of " + format_seconds(options_.duration_s) + " s reached; stopping");
     runtime::Node::request_stop();
@@ -433,7 +468,10 @@ host_state_t Supervisor::host_state() const {
   }
   hs.num_modules = static_cast<int32_t>(hs.modules.size());
   const std::string down = down_summary();
-  hs.status = down.empty() ? "ok" : "down: " + down;
+  const std::string silent = silent_peers(now);
+  hs.status = down.empty() ? "" : "down: " + down;
+  if (!silent.empty()) hs.status += (hs.status.empty() ? "" : "; ") + silent;
+  if (hs.status.empty()) hs.status = "ok";
   return hs;
 }
 

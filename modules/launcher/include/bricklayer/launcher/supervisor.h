@@ -9,12 +9,18 @@
 // silent only while the launcher hears its own heartbeat: with the bus itself down (an interface
 // down and up) nothing is killed for a silence nobody could have heard.
 //
-// Subscribes: BL_HEARTBEAT (heartbeat_t).
+// It also listens to the other hosts' launchers: a host whose state stops arriving (the other machine
+// off, the link cut) is named in this host's status ("no host state from projector-host for 7 s")
+// until it is heard again; a host whose last message said it stopped is not missed.
+//
+// Subscribes: BL_HEARTBEAT (heartbeat_t), BL_HOST_STATE (host_state_t, the other hosts').
 // Publishes:  BL_HEARTBEAT (its own, module "launcher"); BL_HOST_STATE (host_state_t, once a second:
 //             every module's state, pid, restarts, uptime, counters summed across restarts, status).
 #pragma once
 
 #include <chrono>
+#include <map>
+#include <set>
 #include <memory>
 #include <string>
 #include <vector>
@@ -99,6 +105,8 @@ class Supervisor {
   };
 
   void HandleHeartbeat(const heartbeat_t& hb);
+  void HandleHostState(const host_state_t& hs);
+  std::string silent_peers(Clock::time_point now) const;
   void tick();
   void before_heartbeat();
   void start(Managed& m);
@@ -130,6 +138,12 @@ class Supervisor {
   Clock::time_point t0_;
   Clock::time_point last_self_heard_{};  // the launcher's own heartbeat, heard back on the bus
   bool bus_was_deaf_ = false;
+  struct Peer {
+    Clock::time_point last_seen;
+    bool stopped = false;  // its last message had every module stopped: it shut down on purpose
+  };
+  std::map<std::string, Peer> peers_;  // other hosts, by host_state_t.host
+  std::set<std::string> now_silent_;   // the hosts whose silence has been said
   Clock::time_point next_route_repair_{};
 };
 
