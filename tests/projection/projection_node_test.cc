@@ -2,14 +2,17 @@
 // on a clock that moves only when the test steps it, so every moment is exact: a round starts the
 // instant the hold is over, ends exactly at its duration, a node built again on the same round book
 // (a restart) runs the same round on, stale inputs turn the heartbeat and the drawn blocks, and bad
-// configurations are refused.
+// configurations are refused; the keys (S, R, H, P, Q) as SDL delivers them.
 #include <catch2/catch.hpp>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include <nlohmann/json.hpp>
 
+#include <SDL.h>
+
 #include "bricklayer/board/board_to_projector.h"
+#include "bricklayer/command_t.hpp"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/projection/projection_node.h"
 #include "bricklayer/projector_state_t.hpp"
@@ -96,7 +99,9 @@ struct Camera {
 TEST_CASE("on the rig a round starts the instant the hold is over and ends exactly at its duration") {
   harness::ScratchDir dir("projection-node");
   harness::Rig rig(kStepUs);
-  auto& node = rig.add<ProjectionNode>(quick_config((dir / "rounds.json").string()));
+  // In a folder that does not exist yet (a fresh install's logs/): made when the node starts.
+  auto& node = rig.add<ProjectionNode>(quick_config((dir / "logs" / "rounds.json").string()));
+  CHECK(std::filesystem::is_directory(dir / "logs"));
   auto& rec = rig.record({channel(kRoundChannel)});
   Camera cam{rig};
   cam.run(2 * kS);  // an empty board: armed
@@ -117,7 +122,7 @@ TEST_CASE("on the rig a round starts the instant the hold is over and ends exact
   REQUIRE(ended);
   CHECK(ended->utime == placed + 7 * kS);
   CHECK(ended->max_score == 30);
-  const nlohmann::json book = nlohmann::json::parse(harness::read_file(dir / "rounds.json"));
+  const nlohmann::json book = nlohmann::json::parse(harness::read_file(dir / "logs" / "rounds.json"));
   REQUIRE(book["rounds"].size() == 1);
   CHECK(book["rounds"][0]["start_utime"] == placed + 2 * kS);
   CHECK(book["rounds"][0]["end_utime"] == placed + 7 * kS);
@@ -200,6 +205,57 @@ TEST_CASE("on the rig stale inputs turn the heartbeat and take the verdict colou
   cam.run(1 * kS);
   CHECK(node.input_problem() == InputProblem::kNone);
   red_drawn(true);
+}
+
+TEST_CASE("on the rig the keys start and reset rounds, ask for a hint, take a snapshot and quit") {
+  harness::ScratchDir dir("projection-node-keys");
+  harness::Rig rig(kStepUs);
+  ProjectionConfig config = quick_config((dir / "rounds.json").string());
+  config.snapshot_dir = (dir / "shots").string();
+  auto& node = rig.add<ProjectionNode>(config);
+  auto& rec = rig.record({channel(kCommandChannel)});
+  auto press = [&rig](SDL_Keycode key) {
+    SDL_Event e{};
+    e.type = SDL_KEYDOWN;
+    e.key.keysym.sym = key;
+    REQUIRE(SDL_PushEvent(&e) == 1);
+    rig.step();
+  };
+  rig.step();
+  press(SDLK_s);  // a round on a board never seen: only a key (or START_ROUND) does that
+  REQUIRE(node.round().state() == RoundState::kRunning);
+  CHECK(node.round().running()->start_utime == rig.now());
+  press(SDLK_r);
+  CHECK(node.round().state() == RoundState::kIdle);
+  REQUIRE(node.round().last_round());
+  CHECK(node.round().last_round()->end == RoundEnd::kReset);
+  press(SDLK_h);
+  const auto hint = rec.wait_for<command_t>(channel(kCommandChannel), [](const command_t& c) { return c.command == command_t::REQUEST_HINT; }, 0ms);
+  REQUIRE(hint);
+  CHECK(hint->sequence == 1);
+  press(SDLK_p);
+  CHECK(std::filesystem::exists(dir / "shots" / "snapshot-0001.png"));
+  CHECK_FALSE(node.quit_requested());
+  press(SDLK_q);
+  CHECK(node.quit_requested());
+}
+
+TEST_CASE("on the rig a damaged round book is kept aside, counted, and a new one starts") {
+  harness::ScratchDir dir("projection-node-damaged");
+  const std::string file = (dir / "rounds.json").string();
+  harness::write_file(file, "{\"version\": 1, \"rounds\": [{\"start_ut");  // torn by hand
+  harness::Rig rig(kStepUs);
+  auto& node = rig.add<ProjectionNode>(quick_config(file));
+  CHECK(node.counters().errors == 1);
+  CHECK(harness::read_file(file + ".damaged").find("start_ut") != std::string::npos);
+  CHECK(node.round().history().empty());
+  Camera cam{rig};
+  cam.run(2 * kS);
+  cam.pile = true;
+  cam.run(3 * kS);
+  REQUIRE(node.round().state() == RoundState::kRunning);
+  const nlohmann::json book = nlohmann::json::parse(harness::read_file(file));
+  CHECK(book["running"]["max_score"] == 30);
 }
 
 TEST_CASE("the projection's configuration is checked before anything opens") {

@@ -156,13 +156,19 @@ ProjectionNode::~ProjectionNode() = default;
 
 void ProjectionNode::restore_rounds() {
   if (config_.rounds_file.empty()) return;
+  // A fresh install has no logs/ yet: the book's folder is made here, or the start fails saying why.
+  const std::filesystem::path folder = std::filesystem::path(config_.rounds_file).parent_path();
+  std::error_code ec;
+  if (!folder.empty()) std::filesystem::create_directories(folder, ec);
+  if (ec || (!folder.empty() && !std::filesystem::is_directory(folder)))
+    throw std::runtime_error("cannot create the round book's folder '" + folder.string() + "': " + ec.message());
   RoundBook book;
   try {
     book = load_round_book(config_.rounds_file);
   } catch (const std::exception& e) {
     // Kept aside for a person to look at; the exhibit goes on with a fresh book.
     const std::string aside = config_.rounds_file + ".damaged";
-    std::error_code ec;
+    ec.clear();
     std::filesystem::rename(config_.rounds_file, aside, ec);
     error("damaged round books", std::string(e.what()) + "; kept as " + aside + ", starting a new round book");
   }
