@@ -7,9 +7,19 @@
 #include "bricklayer/prediction/sample_stacks.h"
 #include "bricklayer/runtime/config.h"
 #include "bricklayer/runtime/log_file.h"
+#include "bricklayer/simcam/simcam_node.h"
+#include "bricklayer/vision/vision_node.h"
 #include "harness/rig.h"
 
 namespace bricklayer::test {
+
+namespace {
+void write_log(const std::string& path, const harness::Recorder& rec, runtime::LogWriter& w) {
+  for (const auto& m : rec.messages())
+    if (!w.write(m.utime, m.channel, m.bytes.data(), m.bytes.size())) throw std::runtime_error("cannot write " + path);
+  w.flush();
+}
+}  // namespace
 
 int64_t record_run(const std::string& path, const std::vector<stack_t>& stacks, const RunOptions& o) {
   const int64_t start = stacks.empty() ? runtime::InProcessBus::kDefaultStartUtime : stacks.front().utime;
@@ -35,9 +45,25 @@ int64_t record_run(const std::string& path, const std::vector<stack_t>& stacks, 
   }
   rig.run_for(std::chrono::milliseconds(200));
   runtime::LogWriter w(path);
-  for (const auto& m : rec.messages())
-    if (!w.write(m.utime, m.channel, m.bytes.data(), m.bytes.size())) throw std::runtime_error("cannot write " + path);
-  w.flush();
+  write_log(path, rec, w);
+  return w.events();
+}
+
+int64_t record_camera_run(const std::string& path, const std::string& scenario, int frames) {
+  harness::Rig rig(1000);
+  simcam::SimcamConfig camera;
+  camera.scenario = scenario;
+  camera.frames = frames;
+  camera.no_projector = true;
+  rig.add<simcam::SimcamNode>(camera);
+  auto& v = rig.add<vision::VisionNode>(vision::VisionConfig{});
+  v.set_config(vision::VisionNode::kProgram, runtime::to_json(vision::VisionConfig{}).dump());
+  auto& p = rig.add<prediction::PredictionNode>(prediction::PredictionConfig{});
+  p.set_config(prediction::PredictionNode::kProgram, runtime::to_json(prediction::PredictionConfig{}).dump());
+  auto& rec = rig.record({".*"});
+  rig.run_for(std::chrono::microseconds(static_cast<int64_t>(frames) * 33'334 + 300'000));
+  runtime::LogWriter w(path);
+  write_log(path, rec, w);
   return w.events();
 }
 

@@ -21,6 +21,11 @@ struct RunOptions {
 // Writes the run to path; returns the number of events written.
 int64_t record_run(const std::string& path, const std::vector<stack_t>& stacks, const RunOptions& options = {});
 
+// A camera run: the real simcam, vision and prediction nodes on the rig, a scenario's first `frames`
+// frames at 30 frames a second, every message written to path (as the logger would, frames included).
+// Returns the number of events written.
+int64_t record_camera_run(const std::string& path, const std::string& scenario, int frames);
+
 // n stacks that grow, lean out and fall (some unbalanced), from prediction's sample piles.
 std::vector<stack_t> demo_stacks(int n, int64_t start_utime = 1'767'225'600'000'000);
 

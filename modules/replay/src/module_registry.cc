@@ -5,12 +5,14 @@
 #include "bricklayer/common/channels.h"
 #include "bricklayer/planner/planner_node.h"
 #include "bricklayer/prediction/prediction_node.h"
+#include "bricklayer/vision/vision_node.h"
 
 namespace bricklayer::replay {
 
 const std::vector<ModuleAdapter>& replayable_modules() {
   static const std::vector<ModuleAdapter> modules = [] {
     std::vector<ModuleAdapter> m;
+    m.push_back(node_adapter<vision::VisionNode>("vision", {channel(kStackChannel)}));
     m.push_back(node_adapter<prediction::PredictionNode>("prediction", {channel(kPredictionChannel)}));
     m.push_back(node_adapter<planner::PlannerNode>("planner", {channel(kPreviewChannel), channel(kHintChannel)}));
     return m;

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "bricklayer/common/channels.h"
+#include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/node_config_t.hpp"
 #include "bricklayer/replay/module_registry.h"
 #include "bricklayer/runtime/codec.h"
@@ -23,11 +24,17 @@ std::pair<std::string, std::string> split_set(const std::string& set) {
   return {"", set};
 }
 
-std::vector<std::pair<std::string, std::string>> Replayer::recorded_configs(const std::vector<std::string>& sources,
-                                                                            int64_t from_utime, int64_t* first_utime) {
-  std::vector<std::pair<std::string, std::string>> out;
+std::vector<RecordedModule> Replayer::recorded_modules(const std::vector<std::string>& sources, int64_t from_utime,
+                                                      int64_t* first_utime) {
+  std::vector<RecordedModule> out;
+  auto entry = [&out](const std::string& module) -> RecordedModule& {
+    for (auto& m : out)
+      if (m.module == module) return m;
+    out.push_back({module, "", -1});
+    return out.back();
+  };
   RecordingReader reader(sources, from_utime);
-  const std::string config_channel = channel(kConfigChannel);
+  const std::string config_channel = channel(kConfigChannel), heartbeat_channel = channel(kHeartbeatChannel);
   runtime::LogEvent e;
   int64_t first = -1;
   while (reader.next(e)) {
@@ -37,11 +44,13 @@ std::vector<std::pair<std::string, std::string>> Replayer::recorded_configs(cons
       if (first_utime) *first_utime = first;
     }
     if (e.utime > first + kConfigScanUs) break;
-    if (e.channel != config_channel) continue;
-    const auto c = runtime::decode<node_config_t>(e.data);
-    if (!c) continue;
-    if (std::none_of(out.begin(), out.end(), [&](const auto& p) { return p.first == c->module; }))
-      out.emplace_back(c->module, c->config_json);
+    if (e.channel == config_channel) {
+      const auto c = runtime::decode<node_config_t>(e.data);
+      if (c && entry(c->module).config_json.empty()) entry(c->module).config_json = c->config_json;
+    } else if (e.channel == heartbeat_channel) {
+      const auto h = runtime::decode<heartbeat_t>(e.data);
+      if (h && entry(h->module).start_utime < 0) entry(h->module).start_utime = h->utime - h->uptime_us;
+    }
   }
   return out;
 }
@@ -77,32 +86,33 @@ Replayer::Replayer(std::vector<std::string> sources, ReplayOptions options, Sink
       }() + ") has that field");
   }
   int64_t start = 0;
-  const auto recorded = recorded_configs(sources_, options_.from_utime, &start);
+  const auto recorded = recorded_modules(sources_, options_.from_utime, &start);
   reader_ = std::make_unique<RecordingReader>(sources_, options_.from_utime);
   // The clock starts at the range's first event, before any node reads it (its start, first heartbeat
   // and timers count from there).
   hub_ = std::make_unique<runtime::InProcessBus>(start);
   player_ = &hub_->endpoint("log");
+  adapters_ = adapters;
+  sets_ = sets;
   for (size_t i = 0; i < adapters.size(); ++i) {
     ReplayedModule m;
     m.name = adapters[i]->name;
-    std::string json;
-    for (const auto& [module, config] : recorded)
-      if (module == m.name) json = config;
-    m.config_recorded = !json.empty();
-    BuiltNode built;
-    try {
-      built = adapters[i]->build(json, sets[i], hub_->endpoint(m.name));
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(m.name + ": " + e.what());
+    m.start_utime = start;
+    for (const auto& r : recorded) {
+      if (r.module != m.name) continue;
+      m.config_recorded = !r.config_json.empty();
+      m.config_json = r.config_json;  // replaced by what it runs with when it starts
+      if (r.start_utime > start) m.start_utime = r.start_utime;
     }
-    m.config_json = built.config_json;
-    m.notes = built.notes;
     if (!m.config_recorded) m.notes.push_back("no configuration recorded in the range: the module's defaults");
-    nodes_.push_back(std::move(built.node));
+    if (m.start_utime > start)
+      m.notes.push_back("started " + std::to_string((m.start_utime - start) / 1000) + " ms into the range, as recorded");
     modules_.push_back(std::move(m));
+    nodes_.emplace_back();
     for (const auto& c : adapters[i]->compared) compared_.push_back(c);
   }
+  // Nodes up at the range's start are built now, so a bad configuration is an error before anything runs.
+  start_due(start);
   hub_->set_tap([this](const std::string& endpoint, const std::string& ch, const uint8_t* data, size_t size, int64_t utime) {
     if (endpoint == "log") return;
     sink_(false, ch, std::vector<uint8_t>(data, data + size), utime);
@@ -111,8 +121,25 @@ Replayer::Replayer(std::vector<std::string> sources, ReplayOptions options, Sink
 
 Replayer::~Replayer() = default;
 
+void Replayer::start_due(int64_t utime) {
+  for (size_t i = 0; i < modules_.size(); ++i) {
+    if (nodes_[i] || modules_[i].start_utime > utime) continue;
+    ReplayedModule& m = modules_[i];
+    BuiltNode built;
+    try {
+      built = adapters_[i]->build(m.config_recorded ? m.config_json : std::string(), sets_[i], hub_->endpoint(m.name));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(m.name + ": " + e.what());
+    }
+    m.config_json = built.config_json;
+    m.notes.insert(m.notes.end(), built.notes.begin(), built.notes.end());
+    nodes_[i] = std::move(built.node);
+  }
+}
+
 void Replayer::step_all() {
-  for (auto& n : nodes_) n->step(0);
+  for (auto& n : nodes_)
+    if (n) n->step(0);
 }
 
 void Replayer::settle() {
@@ -143,10 +170,12 @@ bool Replayer::advance() {
   // Between events the nodes' loops tick, as live (timers, hint requests, heartbeats).
   for (int64_t t = hub_->now_utime() + kStepUs; t < e.utime; t += kStepUs) {
     hub_->set_utime(t);
+    start_due(t);
     step_all();
     if (hub_->pending()) settle();
   }
   if (e.utime > hub_->now_utime()) hub_->set_utime(e.utime);  // recorders stamp on receipt: keep it monotone
+  start_due(hub_->now_utime());
   last_utime_ = hub_->now_utime();
   if (observer_) observer_(e);
   if (std::find(compared_.begin(), compared_.end(), e.channel) != compared_.end()) {
@@ -171,7 +200,8 @@ void Replayer::run(const std::function<void(int64_t, int64_t, int64_t)>& progres
 
 std::vector<std::pair<std::string, int64_t>> Replayer::node_errors() const {
   std::vector<std::pair<std::string, int64_t>> out;
-  for (size_t i = 0; i < nodes_.size(); ++i) out.emplace_back(modules_[i].name, nodes_[i]->counters().errors);
+  for (size_t i = 0; i < nodes_.size(); ++i)
+    out.emplace_back(modules_[i].name, nodes_[i] ? nodes_[i]->counters().errors : 0);
   return out;
 }
 

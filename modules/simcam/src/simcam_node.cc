@@ -78,6 +78,7 @@ void SimcamNode::on_projector(const projector_state_t& p) {
 }
 
 void SimcamNode::tick() {
+  if (finished_) return;
   const int64_t due = start_utime_ + static_cast<int64_t>(1e6 * static_cast<double>(frame_number_) / config_.fps);
   if (now() < due) return wake_at(due);
   double t = static_cast<double>(frame_number_) / config_.fps;
@@ -118,6 +119,7 @@ void SimcamNode::tick() {
 }
 
 void SimcamNode::finish(const char* why) {
+  finished_ = true;
   log::info(why, " after ", frame_number_, " frames");
   set_status(why);
   stop();

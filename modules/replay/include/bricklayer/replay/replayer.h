@@ -30,7 +30,16 @@ struct ReplayedModule {
   std::string name;
   std::string config_json;        // what it ran with
   bool config_recorded = false;   // from the log's BL_CONFIG (else its defaults)
+  int64_t start_utime = 0;        // when its node starts: as the recorded one did (its first heartbeat's
+                                  // time less its uptime), or the range's start if it was already up
   std::vector<std::string> notes;
+};
+
+// What a log says about a module near the start of a range.
+struct RecordedModule {
+  std::string module;
+  std::string config_json;   // its first node_config_t in the range ("" = none seen)
+  int64_t start_utime = -1;  // when its process started (first heartbeat's utime - uptime_us), -1 = unknown
 };
 
 class Replayer {
@@ -66,14 +75,18 @@ class Replayer {
   // Errors the nodes counted (rejected inputs, failed computations), per module.
   std::vector<std::pair<std::string, int64_t>> node_errors() const;
 
-  // The configuration each module recorded first in the range (scanning from its start, at most 60 s in).
-  // first_utime: set to the range's first event time (unchanged when the range is empty).
-  static std::vector<std::pair<std::string, std::string>> recorded_configs(const std::vector<std::string>& sources,
-                                                                           int64_t from_utime, int64_t* first_utime = nullptr);
+  // The configuration each module recorded first in the range and when it started (scanning from the
+  // range's start, at most 60 s in). first_utime: set to the range's first event time (unchanged when the
+  // range is empty).
+  static std::vector<RecordedModule> recorded_modules(const std::vector<std::string>& sources, int64_t from_utime,
+                                                      int64_t* first_utime = nullptr);
 
  private:
   void settle();
   void step_all();
+  // Builds the nodes whose start has come (a node that started late live misses what came before, as
+  // the live one did: the projector image it never saw, the frames before it listened).
+  void start_due(int64_t utime);
 
   std::vector<std::string> sources_;
   ReplayOptions options_;
@@ -82,8 +95,10 @@ class Replayer {
   std::unique_ptr<RecordingReader> reader_;
   std::unique_ptr<runtime::InProcessBus> hub_;
   runtime::Bus* player_ = nullptr;
-  std::vector<std::unique_ptr<runtime::Node>> nodes_;
+  std::vector<std::unique_ptr<runtime::Node>> nodes_;  // null until the module's start
   std::vector<ReplayedModule> modules_;
+  std::vector<const ModuleAdapter*> adapters_;
+  std::vector<std::vector<std::string>> sets_;
   std::vector<std::string> compared_;
   int64_t events_ = 0, first_utime_ = 0, last_utime_ = 0;
   bool started_ = false, ended_ = false;

@@ -88,6 +88,7 @@ class SimcamNode final : public runtime::Node {
   cv::Mat projector_image_;
   int64_t frame_number_ = 0;
   int64_t start_utime_ = 0;
+  bool finished_ = false;  // the scenario or the frame limit ended: nothing more to publish
 };
 
 }  // namespace bricklayer::simcam
