@@ -197,6 +197,38 @@ TEST_CASE("bricklayer-launch --check checks every file the modules will read") {
   fs::remove_all(dir);
 }
 
+TEST_CASE("the demo profile with its scenario file missing fails --check, naming the module and the file") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("bricklayer-launch-demo-check-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ifstream in(std::string(BRICKLAYER_SOURCE_DIR) + "/launch/profiles/demo.json");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string demo = text.str();
+  const std::string scenario = "build-4-optimum.json";
+  REQUIRE(demo.find(scenario) != std::string::npos);
+  demo.replace(demo.find(scenario), scenario.size(), "not-there.json");
+  std::ofstream(dir / "demo.json") << demo;
+  SpawnOptions o;
+  o.stdout_path = (dir / "out").string();
+  o.merge_stderr = true;
+  o.env = {"DISPLAY="};
+  auto p = Process::spawn({std::string(BRICKLAYER_BINARY_DIR) + "/bin/bricklayer-launch", "--check", "--root",
+                           BRICKLAYER_SOURCE_DIR, "--bin-dir", std::string(BRICKLAYER_BINARY_DIR) + "/bin",
+                           (dir / "demo.json").string()},
+                          o);
+  auto st = p.wait_for(std::chrono::seconds(60));
+  REQUIRE(st);
+  std::ifstream out_file(dir / "out");
+  std::stringstream out;
+  out << out_file.rdbuf();
+  INFO(out.str());
+  CHECK(st->code == 2);
+  CHECK(out.str().find("module 'simcam'") != std::string::npos);
+  CHECK(out.str().find("launch/scenarios/not-there.json") != std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST_CASE("every shipped profile passes --check in the source tree") {
   for (const auto& entry : std::filesystem::directory_iterator(std::string(BRICKLAYER_SOURCE_DIR) + "/launch/profiles")) {
     if (entry.path().extension() != ".json") continue;
