@@ -341,3 +341,44 @@ TEST_CASE("between rounds the display shows how to start, the last MAX and the d
   CHECK(layout.day_best.x + layout.day_best.w > 1024 - 40);
   CHECK(green_pixels(frame) == 0);
 }
+
+TEST_CASE("a knife edge: the deciding block blue inside with a red outline, the margin text under the miniature") {
+  Fixture f;
+  Scene scene;
+  scene.set_stack(make_stack(5, {{1, 0, -0.6}, {2, 1, -0.1}}));
+  prediction_t p = make_prediction(5, {{1, block_prediction_t::STATE_STABLE}, {2, block_prediction_t::STATE_STABLE}});
+  p.verdict = prediction_t::VERDICT_KNIFE_EDGE;
+  p.raw_verdict = prediction_t::VERDICT_KNIFE_EDGE;
+  p.margin = -0.004;
+  p.margin_mm = -0.3;
+  p.uncertainty = 0.003;
+  p.deciding = {2};
+  p.num_deciding = 1;
+  scene.set_prediction(p);
+  board::BoardToProjector mapping;
+  const cv::Mat frame = f.draw(scene, mapping, hud_for(scene), 800);  // the pulse at its brightest
+  save_for_review(frame, "knife-edge.png");
+  const auto& blocks = scene.blocks();
+  check_block_colour(frame, mapping, blocks[0], kStableBlue);  // not deciding: plain blue
+  check_block_colour(frame, mapping, blocks[1], kStableBlue);  // deciding: still blue inside
+  // On the deciding block's bottom edge, a pixel inwards: lit red (the outline), not the blue fill.
+  const board::Point2 edge = mapping.map(blocks[1].x + 0.5, blocks[1].y);
+  bool red = false;
+  for (int dv = -3; dv <= 3 && !red; ++dv) {
+    const cv::Vec3b px = frame.at<cv::Vec3b>(static_cast<int>(std::lround(edge.y)) + dv, static_cast<int>(std::lround(edge.x)));
+    red = px[2] > 200;
+  }
+  CHECK(red);
+  CHECK(green_pixels(frame) == 0);
+  CHECK(lit_pixels(frame, f.renderer.layout().margin) > 0);
+  CHECK(f.renderer.layout().margin.y > f.renderer.layout().minimap.y);
+
+  // A certain verdict: no outline; a prediction judged without uncertainty: no text.
+  p.verdict = prediction_t::VERDICT_STABLE;
+  p.uncertainty = 0.0;
+  scene.set_prediction(p);
+  const cv::Mat plain = f.draw(scene, mapping, hud_for(scene), 800);
+  CHECK(f.renderer.layout().margin.w == 0);
+  const cv::Vec3b px = plain.at<cv::Vec3b>(static_cast<int>(std::lround(edge.y)) - 2, static_cast<int>(std::lround(edge.x)));
+  CHECK(px[2] == 0);
+}

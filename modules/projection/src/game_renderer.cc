@@ -96,17 +96,49 @@ void GameRenderer::outline(const SDL_FPoint* points, int count, Rgb colour) {
 void GameRenderer::draw_game(const Scene& scene, const board::BoardToProjector& mapping, const Hud& hud, int64_t anim_ms) {
   SDL_SetRenderDrawBlendMode(renderer_, SDL_BLENDMODE_NONE);
   const bool stale = !hud.notice.empty();
-  draw_blocks(scene, mapping, stale);
+  draw_blocks(scene, mapping, stale, anim_ms);
   draw_minimap(scene, anim_ms, stale);
   draw_hud(hud);
+  draw_margin(scene, anim_ms, stale);
 }
 
-void GameRenderer::draw_blocks(const Scene& scene, const board::BoardToProjector& mapping, bool stale) {
+void GameRenderer::draw_margin(const Scene& scene, int64_t anim_ms, bool stale) {
+  const KnifeEdgeLook look = knife_edge_look(stale ? nullptr : scene.prediction_for_stack(), anim_ms);
+  const int margin = std::max(4, height_ / 48);
+  // Under the miniature, which shows the same pile.
+  layout_.margin = draw_text(kMargin, font_small_, look.margin_text, look.knife_edge ? kTextWarning : kTextDim,
+                             margin, layout_.minimap.y + layout_.minimap.h + margin / 2, 0);
+}
+
+// The deciding blocks of a knife edge: a red outline over their fill, drawn `width` pixels thick inwards.
+void GameRenderer::outline_blocks(const KnifeEdgeLook& look, const Scene& scene,
+                                  const std::function<SDL_FPoint(double, double)>& at, int width) {
+  if (!look.knife_edge) return;
+  for (const SceneBlock& b : scene.blocks()) {
+    if (std::find(look.outlined.begin(), look.outlined.end(), b.id) == look.outlined.end()) continue;
+    const SDL_FPoint c[4] = {at(b.x, b.y), at(b.x + 1, b.y), at(b.x + 1, b.y + b.height), at(b.x, b.y + b.height)};
+    const SDL_FPoint centre{(c[0].x + c[2].x) / 2, (c[0].y + c[2].y) / 2};
+    for (int w = 0; w < width; ++w) {
+      SDL_FPoint ring[5];
+      for (int q = 0; q < 4; ++q) {
+        const float dx = centre.x - c[q].x, dy = centre.y - c[q].y;
+        const float len = std::max(1.0f, std::sqrt(dx * dx + dy * dy));
+        ring[q] = SDL_FPoint{c[q].x + dx * static_cast<float>(w) / len, c[q].y + dy * static_cast<float>(w) / len};
+      }
+      ring[4] = ring[0];
+      outline(ring, 5, look.outline);
+    }
+  }
+}
+
+void GameRenderer::draw_blocks(const Scene& scene, const board::BoardToProjector& mapping, bool stale, int64_t anim_ms) {
   for (const SceneBlock& b : scene.blocks()) {
     fill_quad({to_sdl(mapping.map(b.x, b.y)), to_sdl(mapping.map(b.x + 1, b.y)),
                to_sdl(mapping.map(b.x + 1, b.y + b.height)), to_sdl(mapping.map(b.x, b.y + b.height))},
               colour_for(stale ? BlockState::kUnknown : b.state));
   }
+  const KnifeEdgeLook look = knife_edge_look(stale ? nullptr : scene.prediction_for_stack(), anim_ms);
+  outline_blocks(look, scene, [&](double x, double y) { return to_sdl(mapping.map(x, y)); }, std::max(2, height_ / 150));
 }
 
 void GameRenderer::draw_hud(const Hud& hud) {
@@ -200,6 +232,7 @@ void GameRenderer::draw_minimap(const Scene& scene, int64_t anim_ms, bool stale)
   for (const SceneBlock& b : scene.blocks())
     fill_quad({at(b.x, b.y), at(b.x + 1, b.y), at(b.x + 1, b.y + b.height), at(b.x, b.y + b.height)},
               colour_for(stale ? BlockState::kUnknown : b.state));
+  outline_blocks(knife_edge_look(stale ? nullptr : scene.prediction_for_stack(), anim_ms), scene, at, 2);
 
   // The collapse preview: the key frames played back in simulated time (linear between them), looped
   // with a pause at the end, drawn as outlines over the pile.

@@ -12,12 +12,14 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 
 #include <opencv2/core.hpp>
 
 #include "bricklayer/board/board_to_projector.h"
+#include "bricklayer/projection/knife_edge_look.h"
 #include "bricklayer/projection/palette.h"
 #include "bricklayer/projection/round_referee.h"
 #include "bricklayer/projection/scene.h"
@@ -52,6 +54,7 @@ struct Layout {
   SDL_Rect timer{};
   SDL_Rect round_label{};
   SDL_Rect minimap{};
+  SDL_Rect margin{};  // the margin text under the miniature (knife_edge_look.h)
   SDL_Rect day_best{};
   SDL_Rect notice{};
 };
@@ -81,14 +84,17 @@ class GameRenderer {
     int w = 0;
     int h = 0;
   };
-  enum Slot { kScore, kScoreLabel, kMax, kBest, kTimer, kRoundLabel, kDayBest, kNotice, kSlotCount };
+  enum Slot { kScore, kScoreLabel, kMax, kBest, kTimer, kRoundLabel, kDayBest, kNotice, kMargin, kSlotCount };
   // Draws text with its top edge at y; align: 0 left of x, 1 centred on x, 2 right of x.
   SDL_Rect draw_text(Slot slot, TTF_Font* font, const std::string& text, Rgb colour, int x, int y, int align);
   void fill_quad(const std::array<SDL_FPoint, 4>& corners, Rgb colour);
   void outline(const SDL_FPoint* points, int count, Rgb colour);
-  void draw_blocks(const Scene& scene, const board::BoardToProjector& mapping, bool stale);
+  void draw_blocks(const Scene& scene, const board::BoardToProjector& mapping, bool stale, int64_t anim_ms);
   void draw_hud(const Hud& hud);
   void draw_minimap(const Scene& scene, int64_t anim_ms, bool stale);
+  void draw_margin(const Scene& scene, int64_t anim_ms, bool stale);  // knife_edge_look.h's text
+  void outline_blocks(const KnifeEdgeLook& look, const Scene& scene, const std::function<SDL_FPoint(double, double)>& at,
+                      int width);
 
   SDL_Renderer* renderer_;
   int width_;
