@@ -195,6 +195,7 @@ TEST_CASE("optima and harmonic stacks moved -0.02..+0.02: no settled frame shows
 
   // Per (pile, move): settled frames shown stable / knife edge / falls.
   std::map<std::pair<std::string, double>, std::array<int, 3>> shown;
+  std::map<std::pair<std::string, double>, std::pair<int8_t, int>> changes;  // last shown verdict, changes
   int settled_frames = 0, wrong = 0;
   for (const auto& [frame, p] : predictions) {
     const auto t = truth.find(frame);
@@ -222,6 +223,9 @@ TEST_CASE("optima and harmonic stacks moved -0.02..+0.02: no settled frame shows
       if (rows_match && std::abs(right - expected) < 1e-6) which = ph;
     }
     shown[which][static_cast<size_t>(p.verdict)]++;
+    auto& [last, count] = changes.try_emplace(which, p.verdict, 0).first->second;
+    count += p.verdict != last;
+    last = p.verdict;
     if ((p.verdict == prediction_t::VERDICT_STABLE && !stands) || (p.verdict == prediction_t::VERDICT_FALLS && stands)) {
       ++wrong;
       std::cerr << "frame " << frame << " (" << which.first << " " << which.second << "): shown "
@@ -235,4 +239,9 @@ TEST_CASE("optima and harmonic stacks moved -0.02..+0.02: no settled frame shows
   }
   CHECK(settled_frames >= 100);
   CHECK(wrong == 0);
+  // No flicker: within one settled pile the shown verdict changes at most once (the hysteresis band).
+  for (const auto& [k, c] : changes) {
+    INFO(k.first << " moved " << k.second);
+    CHECK(c.second <= 1);
+  }
 }
