@@ -24,6 +24,7 @@
 #include "bricklayer/replay/module_registry.h"
 #include "bricklayer/replay/replayer.h"
 #include "bricklayer/replay/time_arg.h"
+#include "bricklayer/replay/video_render.h"
 #include "bricklayer/runtime/log_file.h"
 
 namespace {
@@ -99,6 +100,9 @@ int Main(int argc, char** argv) {
   flags.add("record-outputs", "", "write the replayed outputs into this LCM log");
   flags.add_bool("update", "rewrite LOG: its recorded outputs become the replayed ones (a regression log)");
   flags.add("max-printed", "10", "mismatches and divergences printed (all are counted)");
+  flags.add("video", "", "render OUT.mp4 (or .avi): camera frame and projector image side by side with the time, score,\n"
+            "verdict and round; with --from/--to a moment (no module is replayed)");
+  flags.add("speed", "1", "--video: 1 = recorded pace, 4 = four times faster");
   flags.add_bool("no-progress", "never print progress (it is printed on long runs: bytes, rate, time left)");
   flags.add("log-level", "info", "debug, info, warn or error");
   if (!flags.parse(argc, argv)) return 0;
@@ -137,6 +141,31 @@ int Main(int argc, char** argv) {
   (void)tty;
   std::unique_ptr<inspect::Progress> bar;
   const auto t0 = std::chrono::steady_clock::now();
+
+  // --video: the recorded moment as a video file.
+  if (!flags.get("video").empty()) {
+    VideoOptions vo;
+    vo.path = flags.get("video");
+    vo.speed = flags.get_double("speed");
+    VideoRenderer video(vo);
+    RecordingReader reader(sources, options.from_utime);
+    runtime::LogEvent e;
+    int64_t since = 0;
+    while (reader.next(e)) {
+      if (e.utime < options.from_utime) continue;
+      if (e.utime > options.to_utime) break;
+      video.observe(e);
+      if (++since % 500 == 0) show_progress(bar, reader);
+    }
+    if (bar) bar->finish();
+    const VideoSummary v = video.finish();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::cout << "wrote " << vo.path << ": " << v.video_frames << " frames, " << v.duration_s << " s, from "
+              << v.camera_frames << " camera frames (" << v.bad_frames << " undecodable) in " << seconds << " s" << std::endl;
+    const auto damage = damage_report(reader, options.from_utime, options.to_utime, nullptr);
+    for (const auto& d : damage) std::cout << "DAMAGED " << d << "\n";
+    return damage.empty() ? 0 : 3;
+  }
 
   // --diff: two replays in lockstep, compared with each other.
   if (flags.get_bool("diff")) {
