@@ -8,9 +8,12 @@
 // setups) of the mean and max mapping error, and the median / p99 time of compute_calibration; for the
 // board frame: where the origin lands, how level the surface is, and how far board x is off along the
 // bottom row as calibrated and after the correction from blocks (detection/block_scale.h), and after
-// the correction over the whole board (x -5..5 in bands, rows 0, 3, 6 and 9).
+// the correction over the whole board (x -5..5 in bands, rows 0, 3, 6 and 9), along the board only and
+// with the lean of the end lines (calibration/line_lean.h); --verbose also prints, per setup, the
+// correction the truth asks for next to the measured one.
 //
 //   bricklayer-bench-calibration [--setups 20] [--nuisance mild] [--gray-code] [--shelf-clearance 8]
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -21,6 +24,7 @@
 #include <vector>
 
 #include "bricklayer/calibration/calibrator.h"
+#include "bricklayer/calibration/line_lean.h"
 #include "bricklayer/board/mapping.h"
 #include "bricklayer/patterns/patterns.h"
 #include "bricklayer/common/flags.h"
@@ -43,6 +47,8 @@ struct Stats {
   std::vector<double> mean, max, ms, colour, origin, level, shelf_found, board_x, board_x_fixed, reported_max, near_shelf;
   // Worst |board x error| per setup after the correction from blocks, per x band (all rows) and per row (all x).
   std::vector<double> band_fixed[kBandCount], row_fixed[kRowCount], whole_fixed, band_raw[kBandCount];
+  // The same after the lean of the end lines corrected the frame's vertical too (calibration/line_lean.h).
+  std::vector<double> band_lean[kBandCount], row_lean[kRowCount], whole_lean;
 };
 
 
@@ -246,7 +252,19 @@ int Main(int argc, char** argv) {
       const double worst_x = board_x_error(result.calibration, camera);
       corners.board_x.push_back(worst_x);
       detection::BlockScaleMeter meter(result.calibration);
-      for (int f = 0; f < 10; ++f) meter.add(renderer.render(blocks_apart(f), nuisance, nullptr, seed * 100 + 50 + f).bgr);
+      std::vector<cal::LineLean> leans;
+      const double h = result.calibration.block_height;
+      for (int f = 0; f < 10; ++f) {
+        const cv::Mat frame = renderer.render(blocks_apart(f), nuisance, nullptr, seed * 100 + 50 + f).bgr;
+        const size_t before = meter.measured().size();
+        meter.add(frame);
+        cv::Mat grey;
+        cv::extractChannel(frame, grey, 1);  // green, as bricklayer-calibrate --scale-from-blocks
+        for (size_t i = before; i < meter.measured().size(); ++i) {
+          for (double x : {meter.measured()[i].left, meter.measured()[i].right})
+            if (const auto lean = cal::measure_line_lean(grey, result.calibration, x, 0.2 * h, 0.75 * h)) leans.push_back({x, *lean});
+        }
+      }
       std::string why;
       const auto fit = meter.result(20, 0.01, &why);
       if (!fit) {
@@ -260,6 +278,38 @@ int Main(int argc, char** argv) {
         for (int b = 0; b < kBandCount; ++b) corners.band_fixed[b].push_back(grid.band[b]), corners.band_raw[b].push_back(raw.band[b]);
         for (int r = 0; r < kRowCount; ++r) corners.row_fixed[r].push_back(grid.row[r]);
         corners.whole_fixed.push_back(grid.whole);
+        std::string lean_why;
+        if (const auto lean = cal::fit_frame_lean(leans, fit->scale, fit->keystone, 8, &lean_why)) {
+          const BoardXGrid g2 = board_x_grid(
+              cal::apply_frame_correction(result.calibration, fit->scale, fit->keystone, lean->shear, lean->vertical_keystone), camera);
+          for (int b = 0; b < kBandCount; ++b) corners.band_lean[b].push_back(g2.band[b]);
+          for (int r = 0; r < kRowCount; ++r) corners.row_lean[r].push_back(g2.row[r]);
+          corners.whole_lean.push_back(g2.whole);
+          if (verbose) {
+            // The correction the truth asks for: the homography from the calibration's board frame to the true one.
+            std::vector<cv::Point2d> from, to;
+            for (double by = 0; by <= 3.2; by += 0.4)
+              for (double bx = -4; bx <= 4; bx += 0.5) {
+                const cv::Point2d cam = sim::rectified_to_camera(camera, {camera.board.to_px_x(bx), camera.board.to_px_y(by)});
+                from.push_back(board::camera_to_board(result.calibration, cam));
+                to.emplace_back(bx, by);
+              }
+            cv::Mat t = cv::findHomography(from, to, 0);
+            t /= t.at<double>(2, 2);
+            std::printf("seed %d: truth a %.4f b %.4f / d %.4f e %.4f / g %.5f h %.5f; measured a %.4f b %.4f g %.5f h %.5f\n", seed,
+                        t.at<double>(0, 0), t.at<double>(0, 1), t.at<double>(1, 0), t.at<double>(1, 1), t.at<double>(2, 0), t.at<double>(2, 1),
+                        fit->scale, lean->shear, fit->keystone, lean->vertical_keystone);
+          }
+          if (verbose)
+            std::printf("seed %d: lean of %d end lines (%d dropped, residual %.4f): shear %.4f vertical keystone %.5f; whole board %.4f, rows %.4f %.4f %.4f %.4f\n",
+                        seed, lean->lines, lean->outliers, lean->residual, lean->shear, lean->vertical_keystone, g2.whole, g2.row[0], g2.row[1], g2.row[2], g2.row[3]);
+        } else {
+          // As bricklayer-calibrate does: the correction along the board only.
+          std::printf("seed %d: frame lean not measured: %s\n", seed, lean_why.c_str());
+          for (int b = 0; b < kBandCount; ++b) corners.band_lean[b].push_back(grid.band[b]);
+          for (int r = 0; r < kRowCount; ++r) corners.row_lean[r].push_back(grid.row[r]);
+          corners.whole_lean.push_back(grid.whole);
+        }
         if (verbose)
           std::printf("seed %d: whole board (x -5..5, rows 0/3/6/9) worst %.4f; by band %.4f %.4f %.4f %.4f %.4f (scale %.4f keystone %.5f)\n",
                       seed, grid.whole, grid.band[0], grid.band[1], grid.band[2], grid.band[3], grid.band[4], fit->scale, fit->keystone);
@@ -323,6 +373,16 @@ int Main(int argc, char** argv) {
     for (int r = 0; r < kRowCount; ++r)
       std::printf("  row %d (x -5..5): %.4f / %.4f\n", kRows[r], percentile(corners.row_fixed[r], 0.5), percentile(corners.row_fixed[r], 0.99));
     std::printf("  whole board: %.4f / %.4f\n", percentile(corners.whole_fixed, 0.5), percentile(corners.whole_fixed, 0.99));
+    if (!corners.whole_lean.empty()) {
+      std::printf("board x over the whole board after the correction from block lengths and end-line lean (%zu setups; along the board only where the lean was refused), median / p99:\n",
+                  corners.whole_lean.size());
+      for (int b = 0; b < kBandCount; ++b)
+        std::printf("  x %+.0f..%+.0f (rows 0, 3, 6, 9): %.4f / %.4f\n", kBands[b][0], kBands[b][1], percentile(corners.band_lean[b], 0.5),
+                    percentile(corners.band_lean[b], 0.99));
+      for (int r = 0; r < kRowCount; ++r)
+        std::printf("  row %d (x -5..5): %.4f / %.4f\n", kRows[r], percentile(corners.row_lean[r], 0.5), percentile(corners.row_lean[r], 0.99));
+      std::printf("  whole board: %.4f / %.4f\n", percentile(corners.whole_lean, 0.5), percentile(corners.whole_lean, 0.99));
+    }
   }
   report("markers, centres only", centres, "fit");
   report("Gray code, dense (bits >= 2)", gray, "fit");

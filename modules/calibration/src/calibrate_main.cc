@@ -15,8 +15,10 @@
 //   --scale-from-blocks  load --output, measure how long blocks standing apart on the bottom row read in
 //                 its board frame over --scale-frames camera frames (detection/block_scale.h: the board's
 //                 scale comes from the projector and is off when the projector is not mounted square),
-//                 correct the board frame (scale and keystone along the board), save and publish (exit 0),
-//                 or say what to fix (exit 1).
+//                 correct the board frame (scale and keystone along the board, and from the lean of the
+//                 blocks' end lines its shear and vertical keystone: calibration/line_lean.h), save and
+//                 publish (exit 0), or say what to fix (exit 1). Only frames that count --scale-blocks
+//                 blocks (default: the count most frames agree on) are measured.
 //   --serve       load --output, publish it (again every --republish seconds, so late starters catch
 //                 up; re-read when the file changes, e.g. after --scale-from-blocks; a missing or bad
 //                 file is waited for, not fatal: the launcher starts --serve before anyone calibrated), and run the
@@ -31,6 +33,7 @@
 #include <cmath>
 #include <deque>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -51,6 +54,7 @@
 #include "bricklayer/image_t.hpp"
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/stack_t.hpp"
+#include "bricklayer/calibration/line_lean.h"
 #include "bricklayer/detection/block_scale.h"
 #include "bricklayer/frames/image_codec.h"
 
@@ -62,6 +66,7 @@ namespace cal = calibration;
 constexpr int kExitRejected = 1;
 constexpr int kExitDrift = 3;
 constexpr double kScaleCheckHalfWidth = 4.0;  // block lengths either side of the edge a correction is judged over
+constexpr double kScaleCheckHeight = 3.0;     // and the heights (block lengths above the surface, ~9 rows)
 
 // A camera (or projector) frame as BGR, or empty when it cannot be decoded (counted as an error by the
 // caller). Vision's decoder: it checks the sizes the message and the JPEG/PNG header declare before
@@ -95,6 +100,7 @@ struct Options {
   double self_check_every_s = 0.0;  // --serve: automatic self-check period (0 = only on command)
   double empty_for_s = 5.0;         // the board must have been empty this long for an automatic check
   int scale_frames = 10;            // --scale-from-blocks: camera frames measured
+  int scale_blocks = 0;             // --scale-from-blocks: blocks placed (frames that count otherwise are left out); 0: the count most frames agree on
   double scale_max_residual = 0.01;  // --scale-from-blocks: largest RMS relative error of the fitted block lengths
   double scale_min_change = 0.02;    // --scale-from-blocks: corrections moving no point within 4 block lengths of
                                      // the edge by more than this are within the measurement's own bias
@@ -433,21 +439,83 @@ class Calibrate {
                 calibration_->camera_height, " (the calibration's camera size); skipped");
       return;
     }
+    const size_t before = scale_->measured().size();
     const int blocks = scale_->add(bgr);
+    // The lean of the measured blocks' end lines (calibration/line_lean.h), in the green channel, where
+    // the game's red and blue light on the blocks leaks least.
+    cv::Mat green;
+    cv::extractChannel(bgr, green, 1);
+    const double h = calibration_->block_height;
+    ScaleFrame frame;
+    frame.blocks = blocks;
+    for (size_t i = before; i < scale_->measured().size(); ++i) {
+      frame.lines.push_back(scale_->measured()[i]);
+      for (double x : {scale_->measured()[i].left, scale_->measured()[i].right})
+        if (const auto lean = calibration::measure_line_lean(green, *calibration_, x, 0.2 * h, 0.75 * h)) frame.leans.push_back({x, *lean});
+    }
+    scale_by_frame_.push_back(std::move(frame));
     log::debug("frame ", m.frame_number, ": ", blocks, " bottom-row blocks standing apart measured");
     if (++scale_frames_ < options_.scale_frames) return;
+    scale_.reset();
+
+    // Under blur and noise a frame now and then counts a block too many (a shadow edge paired with a line)
+    // or one too few: only the frames that count the blocks placed (--scale-blocks), or else the count most
+    // frames agree on, are measured.
+    std::map<int, int> counts;
+    for (const ScaleFrame& f : scale_by_frame_) ++counts[f.blocks];
+    int expected = options_.scale_blocks;
+    if (expected == 0) {
+      int best = 0;
+      for (const auto& [count, frames] : counts)
+        if (frames > best) best = frames, expected = count;  // ties: the smaller count (map order)
+    }
+    std::vector<detection::EndLines> lines;
+    std::vector<calibration::LineLean> leans;
+    int kept = 0;
+    std::ostringstream seen;
+    for (const auto& [count, frames] : counts) seen << (seen.tellp() > 0 ? ", " : "") << count << " in " << frames;
+    for (const ScaleFrame& f : scale_by_frame_) {
+      if (f.blocks != expected) continue;
+      ++kept;
+      lines.insert(lines.end(), f.lines.begin(), f.lines.end());
+      leans.insert(leans.end(), f.leans.begin(), f.leans.end());
+    }
+    scale_by_frame_.clear();
+    module_.set_value("scale_frames_used", kept);
+    if (kept * 2 < options_.scale_frames) {
+      const std::string why = "blocks counted per frame: " + seen.str() + " frames; only " + std::to_string(kept) + " of " +
+                              std::to_string(options_.scale_frames) + " frames count " + std::to_string(expected) +
+                              (options_.scale_blocks > 0 ? " (--scale-blocks)" : "") +
+                              ": are the blocks standing apart, whole in view, the camera steady?";
+      log::error("board scale not measured: ", why);
+      module_.set_status("scale not measured: " + why);
+      finish(kExitRejected);
+      return;
+    }
+    if (kept < options_.scale_frames) log::info("blocks counted per frame: ", seen.str(), " frames; measuring the ", kept, " that count ", expected);
 
     std::string why;
-    const std::optional<detection::BoardCorrection> fit =
-        scale_->result(2 * options_.scale_frames, options_.scale_max_residual, &why);
-    scale_.reset();
+    const std::optional<detection::BoardCorrection> fit = detection::fit_board_correction(
+        lines, detection::DetectorConfig{}.line_width, 2 * kept, options_.scale_max_residual, &why);
     if (!fit) {
       log::error("board scale not measured: ", why);
       module_.set_status("scale not measured: " + why);
       finish(kExitRejected);
       return;
     }
-    const double change = fit->max_change(kScaleCheckHalfWidth);
+    std::string lean_why;
+    const std::optional<calibration::FrameLean> lean =
+        calibration::fit_frame_lean(leans, fit->scale, fit->keystone, 2 * kept, &lean_why);
+    const double shear = lean ? lean->shear : 0.0;
+    const double vertical_keystone = lean ? lean->vertical_keystone : 0.0;
+    if (!lean) log::warn("the lean of the board's vertical not measured (", lean_why, "): corrected along the board only");
+    const double change = std::max(fit->max_change(kScaleCheckHalfWidth),
+                                   calibration::frame_correction_change(fit->scale, fit->keystone, shear, vertical_keystone,
+                                                                        kScaleCheckHalfWidth, kScaleCheckHeight));
+    module_.set_value("scale", fit->scale);
+    module_.set_value("keystone", fit->keystone);
+    module_.set_value("shear", shear);
+    module_.set_value("vertical_keystone", vertical_keystone);
     module_.set_value("block_length", fit->length_at(0.0));
     module_.set_value("blocks_measured", fit->blocks);
     module_.set_value("correction_max_change", change);
@@ -456,7 +524,11 @@ class Calibrate {
     text << "blocks read " << fit->length_at(-2.0) << ", " << fit->length_at(0.0) << " and " << fit->length_at(2.0)
          << " block lengths long 2 lengths left of the edge, at it and 2 right of it (" << fit->blocks
          << " measurements, " << fit->outliers << " dropped, residual " << 100 * fit->residual
-         << "%); the correction moves points within " << kScaleCheckHalfWidth << " lengths of the edge by up to " << change;
+         << "%); end lines lean " << (lean ? std::to_string(lean->lines) + " measured: shear " + std::to_string(shear) +
+                                                  ", vertical keystone " + std::to_string(vertical_keystone)
+                                            : std::string("not measured"))
+         << "; the correction moves points within " << kScaleCheckHalfWidth << " lengths of the edge and "
+         << kScaleCheckHeight << " above the surface by up to " << change;
     if (change < options_.scale_min_change) {
       log::info(text.str(), ": below --scale-min-change ", options_.scale_min_change, ", ", options_.output,
                 " left as it is");
@@ -464,7 +536,8 @@ class Calibrate {
       finish(0);
       return;
     }
-    calibration_t corrected = detection::apply_board_correction(*calibration_, *fit);
+    calibration_t corrected =
+        calibration::apply_frame_correction(*calibration_, fit->scale, fit->keystone, shear, vertical_keystone);
     corrected.utime = wall_utime();
     try {
       board::save_calibration(options_.output, corrected);
@@ -526,6 +599,13 @@ class Calibrate {
   double scale_started_s_ = 0;
   int scale_seen_ = 0;    // frames received in --scale-from-blocks
   int scale_frames_ = 0;  // frames measured
+  // --scale-from-blocks: what each frame measured (the blocks' end lines and their leans).
+  struct ScaleFrame {
+    int blocks = 0;
+    std::vector<detection::EndLines> lines;
+    std::vector<calibration::LineLean> leans;
+  };
+  std::vector<ScaleFrame> scale_by_frame_;
   int exit_code_ = 0;
 };
 
@@ -553,6 +633,7 @@ int Main(int argc, char** argv) {
   flags.add_bool("write-default", "write the uncalibrated default setup (modules/board) to --output and exit");
   flags.add_bool("scale-from-blocks", "correct the saved calibration's board scale from 3+ blocks standing apart on the bottom row, save, publish and exit");
   flags.add("scale-frames", "10", "--scale-from-blocks: camera frames to measure");
+  flags.add("scale-blocks", "0", "--scale-from-blocks: how many blocks stand apart on the bottom row (frames counting otherwise are left out); 0 = the count most frames agree on");
   flags.add("scale-max-residual", "0.01", "--scale-from-blocks: refuse when the block lengths disagree with the fitted correction by more than this fraction (RMS)");
   flags.add("scale-min-change", "0.02", "--scale-from-blocks: leave the calibration as it is when the correction moves no point within 4 block lengths of the edge by more than this, block lengths");
   if (!flags.parse(argc, argv)) return 0;
@@ -587,6 +668,8 @@ int Main(int argc, char** argv) {
   if (options.empty_for_s < 0) throw FlagError("--empty-for must not be negative");
   options.scale_frames = static_cast<int>(flags.get_int("scale-frames"));
   if (options.scale_frames < 1 || options.scale_frames > 1000) throw FlagError("--scale-frames must be 1..1000");
+  options.scale_blocks = static_cast<int>(flags.get_int("scale-blocks"));
+  if (options.scale_blocks < 0 || options.scale_blocks > 100) throw FlagError("--scale-blocks must be 0..100");
   options.scale_max_residual = flags.get_double("scale-max-residual");
   if (!(options.scale_max_residual > 0 && options.scale_max_residual < 1)) throw FlagError("--scale-max-residual must be in (0, 1)");
   options.scale_min_change = flags.get_double("scale-min-change");
