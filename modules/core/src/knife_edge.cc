@@ -131,9 +131,10 @@ void add_block_rows(const ContactGraph& g, opt::Problem& p, const StaticsVars& v
 // greedily top-down for a uniform delta instead of optimised. Each block puts its load (its weight plus what
 // it carries, at its centre of pressure) either on one support, at the centre of pressure, or on two supports
 // at their midpoints by the lever rule, whichever of these choices lets its own contacts take the largest
-// delta; its budget (1 + what it carries) is split in proportion to the forces. Returns the largest uniform
+// delta; its budget (1 + what it carries) is split between the two in proportion to the forces, or (second
+// variant, split_by_room) by the room each has left at the block's own best delta. Returns the largest uniform
 // delta this certificate proves (-1: none).
-double stable_margin_greedy(const ContactGraph& g, int* limiting = nullptr) {
+double stable_margin_greedy(const ContactGraph& g, bool split_by_room, int* limiting = nullptr) {
   const size_t k_count = g.contacts.size();
   std::vector<double> force(k_count, 0.0), moment(k_count, 0.0), budget(k_count, 0.0);
   std::vector<double> lo_moves(k_count), hi_moves(k_count);
@@ -146,6 +147,34 @@ double stable_margin_greedy(const ContactGraph& g, int* limiting = nullptr) {
   auto allows = [&](size_t k, double f, double p, double b) {
     const Contact& c = g.contacts[k];
     return std::min(f * (p - c.left) / (b + f * lo_moves[k]), f * (c.right - p) / (b + f * hi_moves[k]));
+  };
+  // How much budget contact k (force f at p) can take at a move delta while keeping its point inside.
+  auto room = [&](size_t k, double f, double p, double delta) {
+    const Contact& c = g.contacts[k];
+    return f * std::min((p - c.left) / delta - lo_moves[k], (c.right - p) / delta - hi_moves[k]);
+  };
+  // Two supports: the largest delta for which their room covers the budget `need` (split by room, not by
+  // force, so a long contact takes the budget a hair-thin one cannot). Bisection; the room shrinks with delta.
+  auto pair_delta = [&](size_t ka, double fa, double pa, size_t kb, double fb, double pb, double need, double& share_a) {
+    auto fits = [&](double delta) {
+      const double ra = fa > 0.0 ? room(ka, fa, pa, delta) : 0.0;
+      const double rb = fb > 0.0 ? room(kb, fb, pb, delta) : 0.0;
+      return ra >= 0.0 && rb >= 0.0 && ra + rb >= need;
+    };
+    double lo = 0.0, hi = kMaxMargin;
+    if (fits(hi)) {
+      lo = hi;
+    } else {
+      for (int it = 0; it < 40; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (fits(mid) ? lo : hi) = mid;
+      }
+    }
+    if (!(lo > 0.0)) return -1.0;
+    const double ra = fa > 0.0 ? room(ka, fa, pa, lo) : 0.0;
+    const double rb = fb > 0.0 ? room(kb, fb, pb, lo) : 0.0;
+    share_a = ra + rb > 0.0 ? ra / (ra + rb) : 0.5;
+    return lo;
   };
   double margin = kMaxMargin;
   for (int r = g.num_rows() - 1; r >= 0 && margin > 0.0; --r) {
@@ -164,6 +193,7 @@ double stable_margin_greedy(const ContactGraph& g, int* limiting = nullptr) {
       double best = -1.0;
       size_t ba = k_count, bb = k_count;
       double fa = 0.0;
+      double share = 1.0;
       for (size_t x = 0; x < sup.size(); ++x) {
         const size_t ka = static_cast<size_t>(sup[x]);
         const double one = allows(ka, load, pressure, need);
@@ -180,13 +210,17 @@ double stable_margin_greedy(const ContactGraph& g, int* limiting = nullptr) {
           if (!(mb - ma > kContactTolerance) || pressure < ma || pressure > mb) continue;
           const double f1 = load * (mb - pressure) / (mb - ma);
           const double f2 = load - f1;
-          const double both = std::min(f1 > 0.0 ? allows(ka, f1, ma, need * f1 / load) : kMaxMargin,
+          double share_a = f1 / load;
+          const double both =
+              split_by_room ? pair_delta(ka, f1, ma, kb, f2, mb, need, share_a)
+                            : std::min(f1 > 0.0 ? allows(ka, f1, ma, need * f1 / load) : kMaxMargin,
                                        f2 > 0.0 ? allows(kb, f2, mb, need * f2 / load) : kMaxMargin);
           if (both > best) {
             best = both;
             ba = ka;
             bb = kb;
             fa = f1;
+            share = share_a;
           }
         }
       }
@@ -205,8 +239,8 @@ double stable_margin_greedy(const ContactGraph& g, int* limiting = nullptr) {
       force[bb] = load - fa;
       moment[ba] = fa * ma;
       moment[bb] = (load - fa) * mb;
-      budget[ba] = need * fa / load;
-      budget[bb] = need * (load - fa) / load;
+      budget[ba] = need * share;
+      budget[bb] = need * (1.0 - share);
     }
   }
   return margin > 0.0 ? margin : -1.0;
@@ -500,8 +534,16 @@ KnifeEdgeVerdict judge_knife_edge(const Stack& stack, const std::vector<double>&
     return out;
   }
   if (out.nominal.balanced) {
-    int limiting = -1;
-    const double quick = stable_margin_greedy(g, &limiting);
+    // Two greedy variants (budgets split by force, or by the room each contact has); the better one counts.
+    int limiting = -1, limiting_room = -1;
+    double quick = stable_margin_greedy(g, false, &limiting);
+    if (quick < out.uncertainty) {
+      const double by_room = stable_margin_greedy(g, true, &limiting_room);
+      if (by_room > quick) {
+        quick = by_room;
+        limiting = limiting_room;
+      }
+    }
     if (quick >= out.uncertainty && quick >= 0.0) {
       out.certainty = Certainty::kStable;
       out.margin = quick;
