@@ -175,22 +175,33 @@ int RoundReferee::max_score() const {
   return history_.back().max_score;
 }
 
-int RoundReferee::day_best(int64_t now) const {
+void RoundReferee::count_today(int64_t now) const {
   const int today = local_day(now);
-  int best = 0;
+  if (today_.valid && today_.revision == revision_ && today_.day == today) return;
+  Today t;
+  t.revision = revision_;
+  t.day = today;
+  t.valid = true;
   // Newest first, up to the first round of an earlier day (rounds are kept in the order they started).
-  for (auto it = history_.rbegin(); it != history_.rend() && local_day(it->start_utime) == today; ++it)
-    best = std::max(best, it->max_score);
-  if (running_ && local_day(running_->start_utime) == today) best = std::max(best, running_->max_score);
-  return best;
+  for (auto it = history_.rbegin(); it != history_.rend() && local_day(it->start_utime) == today; ++it) {
+    t.best = std::max(t.best, it->max_score);
+    ++t.rounds;
+  }
+  if (running_ && local_day(running_->start_utime) == today) {
+    t.best = std::max(t.best, running_->max_score);
+    ++t.rounds;
+  }
+  today_ = t;
+}
+
+int RoundReferee::day_best(int64_t now) const {
+  count_today(now);
+  return today_.best;
 }
 
 int RoundReferee::rounds_today(int64_t now) const {
-  const int today = local_day(now);
-  int n = 0;
-  for (auto it = history_.rbegin(); it != history_.rend() && local_day(it->start_utime) == today; ++it) ++n;
-  if (running_ && local_day(running_->start_utime) == today) ++n;
-  return n;
+  count_today(now);
+  return today_.rounds;
 }
 
 }  // namespace bricklayer::projection

@@ -97,6 +97,9 @@ class RoundReferee {
   void advance(int64_t now);  // time up
   void finish(int64_t end_utime, RoundEnd why);
   void begin(int64_t now);
+  // The day's best and count, recomputed only when the history or the day changed (a display asks
+  // for them every frame).
+  void count_today(int64_t now) const;
 
   RoundRules rules_;
   RoundState state_ = RoundState::kIdle;
@@ -115,6 +118,14 @@ class RoundReferee {
   bool changed_ = true;
   int64_t shown_seconds_ = -1;
   int shown_day_best_ = -1;
+  struct Today {
+    uint64_t revision = 0;
+    int day = 0;
+    int best = 0;
+    int rounds = 0;
+    bool valid = false;
+  };
+  mutable Today today_;
 };
 
 // The local calendar day of a time (yyyymmdd), by the process's time zone.
