@@ -243,3 +243,18 @@ TEST_CASE("piles whose verdict survives every sampled move up to 0.015 are never
   std::printf("verdicts unchanged under sampled moves up to 0.015: %d of 300 piles\n", checked);
   CHECK(checked > 150);
 }
+
+TEST_CASE("without LPs (piles above max_lp_blocks) a verdict is only ever less certain, never different") {
+  int fewer = 0;
+  for (int k = 0; k < 120; ++k) {
+    const Stack s = player_pile(10 + k % 50, 21000 + static_cast<uint64_t>(k));
+    const std::vector<double> u(s.blocks.size(), kU);
+    const KnifeEdgeVerdict with = judge_knife_edge(s, u);
+    const KnifeEdgeVerdict without = judge_knife_edge(s, u, {}, 0);
+    INFO("pile " << k);
+    CHECK(without.linear_programs == 0);
+    CHECK((without.certainty == with.certainty || without.certainty == Certainty::kKnifeEdge));
+    fewer += without.certainty != with.certainty;
+  }
+  std::printf("without LPs: %d of 120 piles lose their certain verdict\n", fewer);
+}

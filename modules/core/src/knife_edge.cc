@@ -509,7 +509,7 @@ const char* to_string(Certainty certainty) {
 }
 
 KnifeEdgeVerdict judge_knife_edge(const Stack& stack, const std::vector<double>& uncertainty,
-                                  const PredictOptions& options) {
+                                  const PredictOptions& options, size_t max_lp_blocks) {
   if (options.position_tolerance != 0.0) {
     throw std::invalid_argument("judge_knife_edge: the position uncertainty replaces position_tolerance (set it to 0)");
   }
@@ -529,6 +529,7 @@ KnifeEdgeVerdict judge_knife_edge(const Stack& stack, const std::vector<double>&
   out.nominal = predict(stack, options);  // validates
   const ContactGraph g = build_contacts(stack);
   const std::string& solver = options.solver;
+  const bool lps = g.size() <= max_lp_blocks;
   if (g.size() == 0) {
     out.margin = kMaxMargin;
     return out;
@@ -559,7 +560,7 @@ KnifeEdgeVerdict judge_knife_edge(const Stack& stack, const std::vector<double>&
     // One LP: the forces re-chosen for the per-block uncertainties. Its margin is at least u; the greedy's
     // may be larger.
     std::vector<double> robust;
-    if (stable_for(g, uncertainty, solver, robust, out.linear_programs)) {
+    if (lps && stable_for(g, uncertainty, solver, robust, out.linear_programs)) {
       out.certainty = Certainty::kStable;
       out.margin = std::max(out.uncertainty, quick);
       return out;
@@ -598,13 +599,13 @@ KnifeEdgeVerdict judge_knife_edge(const Stack& stack, const std::vector<double>&
     out.margin = -std::max(0.0, cut.uniform);
     return out;
   }
-  const double margin = std::max(cut.uniform, falls_margin(g, accel, alpha, solver, out.linear_programs));
+  const double margin = std::max(cut.uniform, lps ? falls_margin(g, accel, alpha, solver, out.linear_programs) : -1.0);
   if (margin >= out.uncertainty && margin >= 0.0) {
     out.certainty = Certainty::kFalls;
     out.margin = -margin;
     return out;
   }
-  if (falls_for(g, uncertainty, solver, out.linear_programs)) {
+  if (lps && falls_for(g, uncertainty, solver, out.linear_programs)) {
     out.certainty = Certainty::kFalls;
     out.margin = -std::max(out.uncertainty, margin);
     return out;

@@ -3,6 +3,7 @@
 // method and every approximation are in modules/core/README.md "Knife edges".
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -23,6 +24,9 @@ const char* to_string(Certainty certainty);
 inline constexpr double kMaxMargin = 0.05;
 // Largest accepted position uncertainty, block lengths.
 inline constexpr double kMaxUncertainty = 0.05;
+// Above this many blocks no LP is solved (a cold CLP start costs 50-550 ms at 200-500 blocks): what the
+// greedy certificate, the cuts and the witnesses cannot settle is a knife edge. See README "Knife edges".
+inline constexpr size_t kMaxLpBlocks = 150;
 // Length of the real block, millimetres (the 7.5 cm face lies on the board).
 inline constexpr double kBlockLengthMm = 75.0;
 
@@ -45,7 +49,8 @@ struct KnifeEdgeVerdict {
 // position_tolerance must be 0 (the uncertainty replaces the widening). Throws StackError (invalid stack),
 // std::invalid_argument (uncertainty of the wrong size, NaN, negative or too large; a nonzero
 // position_tolerance), SolverError (a backend failed). Deterministic.
+// max_lp_blocks: piles with more blocks are judged without LPs.
 KnifeEdgeVerdict judge_knife_edge(const Stack& stack, const std::vector<double>& uncertainty,
-                                  const PredictOptions& options = {});
+                                  const PredictOptions& options = {}, size_t max_lp_blocks = kMaxLpBlocks);
 
 }  // namespace bricklayer::core
