@@ -209,6 +209,12 @@ class FakeRig {
   }
 
   int corrupt_every = 0;  // > 0: every n-th frame carries garbage instead of a JPEG
+  // Every n-th frame shows `scene` instead (a block counted too many or too few now and then).
+  void set_other_scene_every(int n, const core::Stack& scene) {
+    other_every_ = n;
+    const cv::Mat* image = shown_.empty() ? nullptr : &shown_;
+    cv::imencode(".jpg", renderer_.render(scene, nuisance_, image, 4321).bgr, other_jpeg_, {cv::IMWRITE_JPEG_QUALITY, 95});
+  }
 
   std::optional<calibration_t> published;
   std::optional<heartbeat_t> last_heartbeat;
@@ -259,7 +265,7 @@ class FakeRig {
     img.height = size_.height;
     img.format = image_t::FORMAT_JPEG;
     img.source = "fakerig";
-    img.data = jpeg_;
+    img.data = other_every_ > 0 && img.frame_number % other_every_ == 1 ? other_jpeg_ : jpeg_;
     if (corrupt_every > 0 && img.frame_number % corrupt_every == 0) {
       img.data.assign(img.data.size() / 2, 0x5A);  // not a JPEG
     }
@@ -274,6 +280,8 @@ class FakeRig {
   core::Stack scene_;
   cv::Mat shown_;
   std::vector<uint8_t> jpeg_;
+  std::vector<uint8_t> other_jpeg_;
+  int other_every_ = 0;
   cv::Size size_;
   int64_t frame_number_ = 0;
 };
@@ -432,6 +440,9 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
     FakeRig rig(camera, projector);
     rig.set_scene(blocks);
     rig.corrupt_every = 4;  // undecodable frames are counted and skipped
+    core::Stack five = blocks;  // every third frame counts a fifth block: left out, the count most frames agree on is 4
+    five.blocks.push_back({6, 0, -4.9});
+    rig.set_other_scene_every(3, five);
     const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--scale-from-blocks"}, temp("scale.err"));
     const ReapOnExit reap_child{child};
     const int code = rig.run_until_exit(child);
@@ -440,6 +451,7 @@ TEST_CASE("bricklayer-calibrate --scale-from-blocks corrects the board scale of 
     REQUIRE(code == 0);
     CHECK(log.find("board scale corrected") != std::string::npos);
     CHECK(log.find("could not be decoded") != std::string::npos);
+    CHECK(log.find("that count 4") != std::string::npos);
     REQUIRE(rig.published.has_value());
     const calibration_t after = board::load_calibration(output);
     CHECK(after.utime == rig.published->utime);
