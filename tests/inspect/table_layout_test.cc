@@ -21,7 +21,8 @@ size_t column(const TableLayout& t, const std::string& name) {
 }
 
 Json block(int64_t id, double x) {
-  return Json{{"id", id}, {"row", 0}, {"x", x}, {"corner_u", {1, 2, 3, 4}}, {"corner_v", {5, 6, 7, 8.5}}, {"confidence", 1.0}};
+  return Json{{"id", id}, {"row", 0}, {"x", x}, {"corner_u", {1, 2, 3, 4}}, {"corner_v", {5, 6, 7, 8.5}}, {"confidence", 1.0},
+              {"x_uncertainty", 0.0015}};
 }
 
 }  // namespace
