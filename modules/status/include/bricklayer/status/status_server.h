@@ -1,0 +1,41 @@
+// The status page's HTTP server (cpp-httplib): GET / (the page), GET /state.json (the board's JSON).
+// It runs in a thread of its own so a slow phone on the museum's Wi-Fi never holds up the node's bus
+// loop; it only reads the board, which guards itself with a mutex (status_board.h).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "bricklayer/status/status_board.h"
+
+namespace httplib {
+class Server;
+}
+
+namespace bricklayer::status {
+
+class StatusServer {
+ public:
+  // Binds listen:port at once (port 0: any free port, see port()) and serves from a new thread.
+  // Throws std::runtime_error when the address cannot be bound (in use, not this machine's).
+  StatusServer(const StatusBoard& board, const std::string& listen, int port);
+  ~StatusServer();  // stops the server and joins its thread
+  StatusServer(const StatusServer&) = delete;
+  StatusServer& operator=(const StatusServer&) = delete;
+
+  int port() const { return port_; }
+  int64_t requests() const { return requests_.load(); }
+  int64_t not_found() const { return not_found_.load(); }
+
+ private:
+  const StatusBoard& board_;
+  std::unique_ptr<httplib::Server> server_;
+  int port_ = 0;
+  std::atomic<int64_t> requests_{0}, not_found_{0};
+  std::thread thread_;
+};
+
+}  // namespace bricklayer::status

@@ -1,0 +1,33 @@
+#include "bricklayer/status/status_node.h"
+
+#include <stdexcept>
+
+#include "bricklayer/common/channels.h"
+#include "bricklayer/common/log.h"
+#include "bricklayer/launcher/supervisor.h"
+
+namespace bricklayer::status {
+
+StatusNode::StatusNode(const Config& config, runtime::Bus& bus)
+    : Node("status", bus), board_(config.silent_after_s) {
+  if (config.listen.empty()) throw std::invalid_argument("--listen must name an address, e.g. 127.0.0.1");
+  const std::string host_states = channel(launcher::kHostStateChannel);
+  // Every host's message must reach the board, so a queue, not newest-wins (two hosts, one a second).
+  subscribe<host_state_t>(host_states, runtime::QueuePolicy::keep(64),
+                          [this](const host_state_t& s) { board_.update(s, now()); });
+  subscribe<round_t>(channel(kRoundChannel), runtime::QueuePolicy::newest(), [this](const round_t& r) { board_.update(r); });
+  watch_input(host_states, config.silent_after_s, "no host states");
+  board_.set_now(now());
+  server_ = std::make_unique<StatusServer>(board_, config.listen, config.port);
+  log::info("status page at http://" + config.listen + ":" + std::to_string(server_->port()) + "/");
+}
+
+void StatusNode::tick() { board_.set_now(now()); }
+
+void StatusNode::before_heartbeat() {
+  set_value("hosts", static_cast<double>(board_.num_hosts()));
+  set_value("requests", static_cast<double>(server_->requests()));
+  set_value("not_found", static_cast<double>(server_->not_found()));
+}
+
+}  // namespace bricklayer::status

@@ -1,0 +1,122 @@
+#include "bricklayer/status/status_page.h"
+
+namespace bricklayer::status {
+
+namespace {
+// Every string from the bus is put in with textContent, never innerHTML: a module's status line is
+// data, not markup.
+constexpr const char* kPage = R"HTML(<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>Bricklayer status</title>
+<style>
+  body { font-family: system-ui, sans-serif; margin: 0; padding: 12px; background: #f4f4f4; color: #222; }
+  h1 { font-size: 1.3em; margin: 0 0 8px 0; }
+  #overall { padding: 10px 14px; border-radius: 8px; font-size: 1.1em; font-weight: bold; margin-bottom: 10px; }
+  .ok { background: #d7f5d7; } .warning { background: #fff0c2; } .failed { background: #ffd2d2; }
+  .badge { display: inline-block; padding: 1px 8px; border-radius: 10px; font-size: 0.85em; }
+  #problems li { margin: 4px 0; }
+  .card { background: white; border-radius: 8px; padding: 10px 12px; margin-bottom: 10px; box-shadow: 0 1px 2px #0002; }
+  .card h2 { font-size: 1.1em; margin: 0 0 6px 0; }
+  table { border-collapse: collapse; width: 100%; font-size: 0.92em; }
+  td, th { text-align: left; padding: 3px 6px; border-bottom: 1px solid #eee; }
+  .muted { color: #777; font-size: 0.85em; }
+  #round { font-size: 1.05em; }
+</style>
+</head>
+<body>
+<h1>Bricklayer</h1>
+<div id="overall" class="warning">Waiting for the first answer&hellip;</div>
+<ul id="problems"></ul>
+<div class="card" id="round-card"><h2>Round</h2><div id="round">No round heard of yet.</div>
+  <div>Best today: <b id="best">0</b></div></div>
+<div id="hosts"></div>
+<div class="muted" id="updated"></div>
+<script>
+"use strict";
+function el(tag, text, cls) {
+  const e = document.createElement(tag);
+  if (text !== undefined) e.textContent = String(text);
+  if (cls) e.className = cls;
+  return e;
+}
+function duration(s) {
+  s = Math.max(0, Math.floor(s));
+  if (s < 120) return s + " s";
+  if (s < 7200) return Math.floor(s / 60) + " min";
+  return Math.floor(s / 3600) + " h " + (Math.floor(s / 60) % 60) + " min";
+}
+const words = { ok: "Everything is working.", warning: "Something needs a look.", failed: "The exhibit is not working." };
+function draw(state) {
+  const overall = document.getElementById("overall");
+  overall.className = state.level;
+  overall.textContent = words[state.level] || state.level;
+  const problems = document.getElementById("problems");
+  problems.replaceChildren(...state.problems.map((p) => el("li", p)));
+  const round = document.getElementById("round");
+  if (state.round) {
+    const r = state.round;
+    round.textContent = "Round " + r.state + (r.state === "running" ? ", " + duration(r.remaining_s) + " left" : "") +
+      " | score " + r.score + " | MAX " + r.max_score + " | " + r.num_blocks + " blocks";
+  }
+  document.getElementById("best").textContent = state.best_today;
+  const hosts = document.getElementById("hosts");
+  hosts.replaceChildren(...state.hosts.map((h) => {
+    const card = el("div", undefined, "card");
+    card.id = "host-" + h.host;
+    const title = el("h2", h.host + " ");
+    title.appendChild(el("span", h.silent ? "silent" : h.level, "badge " + h.level));
+    card.appendChild(title);
+    card.appendChild(el("div", "profile " + h.profile + " | running for " + duration(h.uptime_s) + " | " +
+      h.modules_up + " of " + h.num_modules + " modules up | " + h.status, "muted"));
+    const table = el("table");
+    const head = table.createTHead().insertRow();
+    for (const c of ["module", "state", "restarts", "up for", "status"]) head.appendChild(el("th", c));
+    const body = table.createTBody();
+    for (const m of h.modules) {
+      const row = body.insertRow();
+      row.className = m.level;
+      row.dataset.module = m.name;
+      row.appendChild(el("td", m.name));
+      row.appendChild(el("td", m.state));
+      row.appendChild(el("td", m.restarts));
+      row.appendChild(el("td", m.state === "up" ? duration(m.uptime_s) : ""));
+      row.appendChild(el("td", m.words || m.status));
+    }
+    card.appendChild(table);
+    return card;
+  }));
+  document.getElementById("updated").textContent = "Updated " + new Date().toLocaleTimeString();
+}
+let failures = 0;
+async function poll() {
+  try {
+    const res = await fetch("state.json", { cache: "no-store" });
+    if (!res.ok) throw new Error("HTTP " + res.status);
+    draw(await res.json());
+    failures = 0;
+  } catch (e) {
+    // The page stays up when the status program restarts: it says so and keeps asking.
+    if (++failures >= 3) {
+      const overall = document.getElementById("overall");
+      overall.className = "failed";
+      overall.textContent = "This page cannot reach bricklayer-status (it is restarting, or this machine is off).";
+    }
+  }
+  setTimeout(poll, 1000);
+}
+poll();
+</script>
+</body>
+</html>
+)HTML";
+}  // namespace
+
+const std::string& status_page_html() {
+  static const std::string page(kPage);
+  return page;
+}
+
+}  // namespace bricklayer::status

@@ -1,0 +1,50 @@
+#include "bricklayer/status/status_server.h"
+
+#include <httplib.h>
+#include <sys/socket.h>
+
+#include <stdexcept>
+
+#include "bricklayer/status/status_page.h"
+
+namespace bricklayer::status {
+
+StatusServer::StatusServer(const StatusBoard& board, const std::string& listen, int port)
+    : board_(board), server_(std::make_unique<httplib::Server>()) {
+  server_->Get("/", [this](const httplib::Request&, httplib::Response& res) {
+    ++requests_;
+    res.set_content(status_page_html(), "text/html; charset=utf-8");
+  });
+  server_->Get("/state.json", [this](const httplib::Request&, httplib::Response& res) {
+    ++requests_;
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(board_.to_json().dump(), "application/json");
+  });
+  server_->set_error_handler([this](const httplib::Request&, httplib::Response& res) {
+    if (res.status == 404) ++not_found_;
+  });
+  // httplib's default also sets SO_REUSEPORT, which lets a second status page share the port in
+  // silence (the kernel would split the requests between them): only SO_REUSEADDR, so a restart
+  // rebinds at once but a port in use is refused.
+  server_->set_socket_options([](socket_t sock) {
+    int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+  });
+  if (port == 0) {
+    port_ = server_->bind_to_any_port(listen);
+    if (port_ < 0) throw std::runtime_error("cannot listen on " + listen + " (any port)");
+  } else {
+    if (!server_->bind_to_port(listen, port))
+      throw std::runtime_error("cannot listen on " + listen + ":" + std::to_string(port) +
+                               " (the port is in use, or the address is not this machine's)");
+    port_ = port;
+  }
+  thread_ = std::thread([this] { server_->listen_after_bind(); });
+}
+
+StatusServer::~StatusServer() {
+  server_->stop();
+  if (thread_.joinable()) thread_.join();
+}
+
+}  // namespace bricklayer::status

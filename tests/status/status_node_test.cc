@@ -1,0 +1,102 @@
+// The node on the in-process rig, asked over real HTTP on loopback (the test binary runs in a private
+// network namespace): /state.json follows the host states published on the bus, / is the page.
+#include <httplib.h>
+
+#include <catch2/catch.hpp>
+
+#include "bricklayer/common/channels.h"
+#include "bricklayer/launcher/supervisor.h"
+#include "bricklayer/status/status_node.h"
+#include "harness/rig.h"
+
+using namespace bricklayer;
+using namespace std::chrono_literals;
+
+namespace {
+nlohmann::json get_state(int port) {
+  httplib::Client client("127.0.0.1", port);
+  auto res = client.Get("/state.json");
+  REQUIRE(res);
+  REQUIRE(res->status == 200);
+  CHECK(res->get_header_value("Content-Type") == "application/json");
+  return nlohmann::json::parse(res->body);
+}
+}  // namespace
+
+TEST_CASE("the status node serves the host states published on the bus") {
+  harness::Rig rig;
+  status::StatusConfig config;
+  config.port = 0;
+  auto& node = rig.add<status::StatusNode>(config);
+  REQUIRE(node.port() > 0);
+
+  CHECK(get_state(node.port())["hosts"].empty());
+
+  host_state_t hs{};
+  hs.host = "camera-host";
+  hs.profile = "camera";
+  hs.status = "down: camera (restarting: exit code 1)";
+  hs.modules.resize(2);
+  hs.modules[0].name = "camera";
+  hs.modules[0].state = module_state_t::STATE_RESTARTING;
+  hs.modules[0].restarts = 3;
+  hs.modules[0].last_exit = "exit code 1";
+  hs.modules[1].name = "vision";
+  hs.modules[1].state = module_state_t::STATE_UP;
+  hs.modules[1].status = "no frames for 7 s";
+  hs.num_modules = 2;
+  hs.modules_up = 1;
+  rig.publish(channel(launcher::kHostStateChannel), hs);
+  round_t r{};
+  r.state = round_t::STATE_ENDED;
+  r.max_score = 275;
+  rig.publish(channel(kRoundChannel), r);
+  rig.step();
+
+  nlohmann::json j = get_state(node.port());
+  REQUIRE(j["hosts"].size() == 1);
+  const nlohmann::json& h = j["hosts"][0];
+  CHECK(h["host"] == "camera-host");
+  CHECK(h["status"] == "down: camera (restarting: exit code 1)");
+  CHECK(h["modules"][0]["state"] == "restarting");
+  CHECK(h["modules"][0]["restarts"] == 3);
+  CHECK(h["modules"][1]["status"] == "no frames for 7 s");
+  CHECK(j["problems"][0] == "camera: restarting (it ended: exit code 1), restarted 3 times");
+  CHECK(j["problems"][1] == "vision: no frames for 7 s");
+  CHECK(j["round"]["state"] == "ended");
+  CHECK(j["best_today"] == 275);
+
+  // Garbage on the channel is a counted error, not a crash, and leaves the board as it was.
+  const int64_t errors = node.counters().errors;
+  rig.publish_bytes(channel(launcher::kHostStateChannel), {1, 2, 3});
+  rig.step();
+  CHECK(node.counters().errors == errors + 1);
+  CHECK(get_state(node.port())["hosts"].size() == 1);
+
+  // The launcher falls silent: the rig's clock, not the wall's, makes it so.
+  rig.run_for(6s);
+  j = get_state(node.port());
+  CHECK(j["hosts"][0]["silent"] == true);
+  CHECK(j["problems"].back().get<std::string>().rfind("camera-host is silent", 0) == 0);
+  CHECK(node.status().rfind("no host states for", 0) == 0);
+
+  httplib::Client client("127.0.0.1", node.port());
+  auto page = client.Get("/");
+  REQUIRE(page);
+  CHECK(page->status == 200);
+  CHECK(page->body.find("<title>Bricklayer status</title>") != std::string::npos);
+  CHECK(page->body.find("state.json") != std::string::npos);
+  auto missing = client.Get("/nothing");
+  REQUIRE(missing);
+  CHECK(missing->status == 404);
+  CHECK(node.server().not_found() == 1);
+}
+
+TEST_CASE("a port already in use is a clear error") {
+  harness::Rig rig;
+  status::StatusConfig config;
+  config.port = 0;
+  auto& first = rig.add<status::StatusNode>(config);
+  config.port = first.port();
+  CHECK_THROWS_WITH(rig.add<status::StatusNode>(config), Catch::Contains("cannot listen on 127.0.0.1:"));
+}
