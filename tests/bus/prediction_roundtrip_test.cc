@@ -59,8 +59,6 @@ struct Expected {
     p.uncertainty = k.uncertainty;
     p.uncertainty_floor = floor;
     p.counts_for_max = verdict != prediction_t::VERDICT_FALLS;
-    p.deciding = k.deciding;
-    p.num_deciding = static_cast<int32_t>(k.deciding.size());
     for (const auto& b : v.blocks) {
       block_prediction_t bp{};
       bp.id = b.id;

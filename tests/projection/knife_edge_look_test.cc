@@ -22,8 +22,13 @@ TEST_CASE("only a knife edge outlines its deciding blocks, in a slow red pulse; 
   prediction_t p{};
   p.status = prediction_t::STATUS_OK;
   p.verdict = prediction_t::VERDICT_KNIFE_EDGE;
-  p.deciding = {3, 5};
-  p.num_deciding = 2;
+  for (int64_t id : {3, 4, 5}) {
+    block_prediction_t b{};
+    b.id = id;
+    b.deciding = id != 4;
+    p.blocks.push_back(b);
+  }
+  p.num_blocks = 3;
   p.uncertainty = 0.003;
   p.margin_mm = 0.12;
   KnifeEdgeLook a = knife_edge_look(&p, 0);

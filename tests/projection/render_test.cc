@@ -352,8 +352,7 @@ TEST_CASE("a knife edge: the deciding block blue inside with a red outline, the 
   p.margin = -0.004;
   p.margin_mm = -0.3;
   p.uncertainty = 0.003;
-  p.deciding = {2};
-  p.num_deciding = 1;
+  p.blocks[1].deciding = true;
   scene.set_prediction(p);
   board::BoardToProjector mapping;
   const cv::Mat frame = f.draw(scene, mapping, hud_for(scene), 800);  // the pulse at its brightest

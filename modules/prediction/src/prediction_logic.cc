@@ -30,7 +30,6 @@ prediction_t empty_answer(const stack_t& stack, const PredictionConfig& config, 
   p.uncertainty = 0.0;
   p.uncertainty_floor = config.uncertainty_floor;
   p.counts_for_max = false;
-  p.num_deciding = 0;
   p.num_blocks = 0;
   return p;
 }
@@ -149,11 +148,10 @@ prediction_t PredictionLogic::answer(const stack_t& stack) const {
   p.margin = verdict.margin;
   p.margin_mm = verdict.margin_mm();
   p.uncertainty = verdict.uncertainty;
-  p.deciding = verdict.deciding;
-  p.num_deciding = static_cast<int32_t>(p.deciding.size());
   for (size_t i = 0; i < p.blocks.size() && i < u.size(); ++i) {
     p.blocks[i].uncertainty = u[i];
-    p.blocks[i].deciding = std::find(p.deciding.begin(), p.deciding.end(), p.blocks[i].id) != p.deciding.end();
+    p.blocks[i].deciding =
+        std::find(verdict.deciding.begin(), verdict.deciding.end(), p.blocks[i].id) != verdict.deciding.end();
   }
   show(p, p.raw_verdict);
   return p;

@@ -29,7 +29,9 @@ KnifeEdgeLook knife_edge_look(const prediction_t* p, int64_t anim_ms) {
   if (p->uncertainty > 0.0) look.margin_text = margin_text(p->margin_mm);
   if (p->verdict != prediction_t::VERDICT_KNIFE_EDGE) return look;
   look.knife_edge = true;
-  look.outlined = p->deciding;
+  for (const auto& b : p->blocks) {
+    if (b.deciding) look.outlined.push_back(b.id);
+  }
   const double phase = static_cast<double>(((anim_ms % kKnifeEdgePulseMs) + kKnifeEdgePulseMs) % kKnifeEdgePulseMs) /
                        static_cast<double>(kKnifeEdgePulseMs);
   const double level = 0.7 - 0.3 * std::cos(2.0 * M_PI * phase);  // 0.4 .. 1.0

@@ -18,7 +18,7 @@ inline constexpr int64_t kKnifeEdgePulseMs = 1600;
 
 struct KnifeEdgeLook {
   bool knife_edge = false;       // the pile is shown as a knife edge
-  std::vector<int64_t> outlined;  // ids of the blocks to outline (the deciding blocks)
+  std::vector<int64_t> outlined;  // ids of the blocks to outline (blocks[].deciding)
   Rgb outline{};                 // the outline's colour now: red, pulsing between 40 % and 100 %
   std::string margin_text;       // "2.0 mm to spare", "0.3 mm too far", "on the edge"; "" when not judged
 };
