@@ -1,0 +1,163 @@
+// bricklayer-bench-recording: how many bytes an hour a recording takes, with every channel kept whole
+// and camera frames under the day's frame policy (a reduced rate, full rate in windows around moments).
+//
+// Without --logs it plays a scenario through the real simcam, vision and prediction nodes on an
+// in-process bus (the same frames, stacks and predictions the exhibit would record, faster than real
+// time) and passes every message through the logger's moment detector and recording policy, exactly
+// as bricklayer-logger does; with --logs it does the same with a recorded log's events. It prints the
+// bytes of the full-rate recording and of the policy's, per hour and for a 10-hour day, and which
+// channels they go to. Hours are extrapolated from the run's span: a scenario's own moments (its red
+// blocks and collapses) set how much runs at full rate.
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <memory>
+
+#include "bricklayer/common/channels.h"
+#include "bricklayer/common/flags.h"
+#include "bricklayer/common/log.h"
+#include "bricklayer/logger/event_writer.h"
+#include "bricklayer/logger/moment_detector.h"
+#include "bricklayer/logger/recording_policy.h"
+#include "bricklayer/prediction/prediction_node.h"
+#include "bricklayer/runtime/in_process_bus.h"
+#include "bricklayer/runtime/log_file.h"
+#include "bricklayer/simcam/simcam_node.h"
+#include "bricklayer/vision/vision_node.h"
+
+namespace {
+
+using namespace bricklayer;
+
+struct Tally {
+  int64_t all_bytes = 0, kept_bytes = 0;
+  std::map<std::string, int64_t> all_by_channel, kept_by_channel;
+  int64_t first = -1, last = -1;
+  int64_t moments = 0;
+};
+
+class Measure {
+ public:
+  explicit Measure(logger::FramePolicyOptions o) : policy_(std::move(o)) {}
+
+  void event(int64_t utime, const std::string& ch, const uint8_t* data, size_t size) {
+    if (t_.first < 0) t_.first = utime;
+    t_.last = utime;
+    logger::Event e{utime, ch, std::vector<uint8_t>(data, data + size)};
+    const int64_t bytes = logger::EventWriter::file_size_of(e);
+    t_.all_bytes += bytes;
+    t_.all_by_channel[ch] += bytes;
+    if (auto m = moments_.observe(ch, data, size, utime); m && logger::MomentDetector::wants_full_rate(*m)) {
+      policy_.moment(utime);
+      ++t_.moments;
+    }
+    policy_.offer(std::move(e));
+    keep(policy_.release(utime));
+  }
+
+  Tally finish() {
+    keep(policy_.release_all());
+    return t_;
+  }
+  const logger::RecordingPolicy& policy() const { return policy_; }
+
+ private:
+  void keep(const std::vector<logger::Event>& out) {
+    for (const auto& e : out) {
+      const int64_t bytes = logger::EventWriter::file_size_of(e);
+      t_.kept_bytes += bytes;
+      t_.kept_by_channel[e.channel] += bytes;
+    }
+  }
+
+  logger::MomentDetector moments_;
+  logger::RecordingPolicy policy_;
+  Tally t_;
+};
+
+// The scenario on an in-process bus: simcam -> vision -> prediction, every message measured.
+void simulate(const std::string& scenario, double seconds, double fps, Measure& measure) {
+  runtime::InProcessBus hub;
+  simcam::SimcamConfig camera;
+  camera.scenario = scenario;
+  camera.fps = fps;
+  camera.loop = true;
+  camera.no_projector = true;
+  std::vector<std::unique_ptr<runtime::Node>> nodes;
+  nodes.push_back(std::make_unique<simcam::SimcamNode>(camera, hub.endpoint("simcam")));
+  nodes.push_back(std::make_unique<vision::VisionNode>(vision::VisionConfig{}, hub.endpoint("vision")));
+  nodes.push_back(std::make_unique<prediction::PredictionNode>(prediction::PredictionConfig{}, hub.endpoint("prediction")));
+  hub.set_tap([&](const std::string&, const std::string& ch, const uint8_t* data, size_t size, int64_t utime) {
+    measure.event(utime, ch, data, size);
+  });
+  const int64_t end = hub.now_utime() + static_cast<int64_t>(seconds * 1e6);
+  while (hub.now_utime() < end) {
+    hub.advance(1000);
+    for (int round = 0; round < 100; ++round) {
+      for (auto& n : nodes) n->step(0);
+      if (!hub.pending()) break;
+    }
+  }
+}
+
+double mb(int64_t bytes) { return static_cast<double>(bytes) / 1e6; }
+
+int Main(int argc, char** argv) {
+  Flags flags("bricklayer-bench-recording",
+              "Bytes an hour of a recording under the day's frame policy, from a scenario played through the\n"
+              "real simcam, vision and prediction nodes, or from recorded logs (--logs A,B).");
+  flags.add("logs", "", "recorded logs to measure instead of a scenario, comma-separated");
+  flags.add("scenario", "launch/scenarios/wall-60.json", "scenario played when no LOG is given (looped)");
+  flags.add("seconds", "120", "scenario time played");
+  flags.add("fps", "30", "camera frames per second");
+  flags.add("rate", "2", "frames kept per second outside windows (the exhibit profiles' policy)");
+  flags.add("before", "10", "full rate this long before a moment, s");
+  flags.add("after", "10", "full rate this long after a moment, s");
+  if (!flags.parse(argc, argv)) return 0;
+  log::set_level(log::parse_level("warn"));
+  logger::FramePolicyOptions o;
+  o.frame_channel = channel(kImageChannel);
+  o.rate = flags.get_double("rate");
+  o.before_s = flags.get_double("before");
+  o.after_s = flags.get_double("after");
+  Measure measure(o);
+  if (flags.get("logs").empty()) {
+    simulate(flags.get("scenario"), flags.get_double("seconds"), flags.get_double("fps"), measure);
+  } else {
+    std::string rest = flags.get("logs");
+    while (!rest.empty()) {
+      const auto comma = rest.find(',');
+      const std::string path = rest.substr(0, comma);
+      rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
+      runtime::LogReader reader(path);
+      runtime::LogEvent e;
+      while (reader.next(e)) measure.event(e.utime, e.channel, e.data.data(), e.data.size());
+    }
+  }
+  const Tally t = measure.finish();
+  const int64_t frames_kept = measure.policy().frames_kept(), frames_thinned = measure.policy().frames_thinned();
+  const double span_h = static_cast<double>(t.last - t.first) / 3.6e9;
+  if (span_h <= 0) throw std::runtime_error("nothing recorded");
+  std::printf("span %.1f s, %lld moments at full rate, frames kept %lld, thinned %lld\n", span_h * 3600,
+              static_cast<long long>(t.moments), static_cast<long long>(frames_kept), static_cast<long long>(frames_thinned));
+  std::printf("%-28s %12s %12s %14s\n", "", "MB", "MB/hour", "GB/10-hour day");
+  std::printf("%-28s %12.2f %12.1f %14.2f\n", "everything at full rate", mb(t.all_bytes), mb(t.all_bytes) / span_h,
+              mb(t.all_bytes) / span_h * 10 / 1000);
+  std::printf("%-28s %12.2f %12.1f %14.2f\n", "the frame policy", mb(t.kept_bytes), mb(t.kept_bytes) / span_h,
+              mb(t.kept_bytes) / span_h * 10 / 1000);
+  const auto truth = t.kept_by_channel.find(channel(kTruthChannel));
+  if (truth != t.kept_by_channel.end()) {
+    // BL_TRUTH is simcam's true stack beside each frame: the exhibit's camera has none.
+    const int64_t without = t.kept_bytes - truth->second;
+    std::printf("%-28s %12.2f %12.1f %14.2f\n", "the policy, no BL_TRUTH", mb(without), mb(without) / span_h,
+                mb(without) / span_h * 10 / 1000);
+  }
+  std::printf("by channel (policy, MB/hour):");
+  for (const auto& [ch, bytes] : t.kept_by_channel) std::printf(" %s %.1f", ch.c_str(), mb(bytes) / span_h);
+  std::printf("\n");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return bricklayer::run_main("bricklayer-bench-recording", &Main, argc, argv); }
