@@ -35,7 +35,7 @@ TEST_CASE("an overlap of 1e-4 is a contact, touching ends are not") {
   CHECK(g.carries[0].size() == 1);
 }
 
-TEST_CASE("a block bridging two blocks has two contact intervals; rows are sorted") {
+TEST_CASE("a block bridging two blocks has two contact intervals, rows are sorted") {
   Stack s;
   s.blocks = {{0, 0, -0.6}, {1, 0, -1.7}, {2, 1, -1.1}};
   const ContactGraph g = build_contacts(s);

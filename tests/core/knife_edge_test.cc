@@ -173,7 +173,7 @@ TEST_CASE("per-block uncertainties: only the blocks that can move matter") {
   CHECK(judge_knife_edge(s, {0.003, 0.003}).certainty == Certainty::kKnifeEdge);  // relative move up to 0.006
 }
 
-TEST_CASE("sampled placements never contradict a certain verdict; how often a knife edge is called anyway") {
+TEST_CASE("sampled placements never contradict a certain verdict, how often a knife edge is called anyway") {
   std::vector<Stack> piles;
   for (const Stack& s : zero_margin_stacks()) {
     for (double d : {-0.02, -0.01, -0.005, -0.002, 0.0, 0.002, 0.005, 0.01, 0.02}) {

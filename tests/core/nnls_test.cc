@@ -57,7 +57,7 @@ TEST_CASE("NNLS: b = 0 and empty problems give x = 0") {
   CHECK(e.x.size() == 0);
 }
 
-TEST_CASE("NNLS matches brute force on random (also rank-deficient) problems; dense, sparse and normal forms agree") {
+TEST_CASE("NNLS matches brute force on random (also rank-deficient) problems, dense, sparse and normal forms agree") {
   std::mt19937 rng(12345);
   std::normal_distribution<double> normal;
   for (int trial = 0; trial < 200; ++trial) {

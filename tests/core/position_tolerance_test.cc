@@ -79,7 +79,7 @@ TEST_CASE("the rightmost block pushed out: within t balanced, 4 t out unbalanced
   }
 }
 
-TEST_CASE("measurement noise well inside t never turns a zero-margin pile red; without t it does") {
+TEST_CASE("measurement noise well inside t never turns a zero-margin pile red, without t it does") {
   int red_without = 0, trials = 0;
   for (const Stack& s : zero_margin_stacks()) {
     for (uint64_t seed = 1; seed <= 20; ++seed) {

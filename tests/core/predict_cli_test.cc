@@ -61,7 +61,7 @@ TEST_CASE("cli: one stack from stdin, exit 0 whatever the verdict") {
   CHECK(nlohmann::json::parse(b.out)["annotator"] == "paper");
 }
 
-TEST_CASE("cli: reads a file; the bundled example stacks all predict") {
+TEST_CASE("cli: reads a file, the bundled example stacks all predict") {
   const Run r = predict_cli(std::string(BRICKLAYER_SOURCE_DIR) + "/launch/stacks/figure15-middle-alone.json", "");
   REQUIRE(r.status == 0);
   CHECK(nlohmann::json::parse(r.out)["unbalanced"] == nlohmann::json::array({1}));

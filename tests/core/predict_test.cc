@@ -52,7 +52,7 @@ TEST_CASE("Figure 15: both the middle and the upper block are unbalanced") {
   }
 }
 
-TEST_CASE("Figure 15: the middle block alone; only the middle block is red under the exact annotator") {
+TEST_CASE("Figure 15: the middle block alone, only the middle block is red under the exact annotator") {
   const Stack s = figure15_middle_alone();
   const Prediction exact = run(s, Annotator::kExact);
   CHECK_FALSE(exact.balanced);
@@ -81,7 +81,7 @@ TEST_CASE("a block resting on nothing is a cause, and so is whatever tips with i
   CHECK(run(off, Annotator::kPaper).causes() == Ids{0});
 }
 
-TEST_CASE("score and overhang; an empty pile is balanced") {
+TEST_CASE("score and overhang, an empty pile is balanced") {
   Stack s = column({-0.5, -0.25});
   s.block_length = 2.0;  // units: x in the same unit as block_length
   s.table_edge = -1.0;

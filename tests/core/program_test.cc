@@ -180,7 +180,7 @@ TEST_CASE("a basis hint (good, singular or wrong-sized) never changes the answer
   CHECK(make_solver("clp")->solve(bad).status == SolveStatus::kError);
 }
 
-TEST_CASE("clp: a warm start from the final basis re-solves without pivots; a changed problem from there gets the cold answer") {
+TEST_CASE("clp: a warm start from the final basis re-solves without pivots, a changed problem from there gets the cold answer") {
   const auto clp = make_solver("clp");
   for (const Known& k : linear_programs()) {
     if (k.status != SolveStatus::kOptimal) continue;
@@ -211,7 +211,7 @@ TEST_CASE("clp: a warm start from the final basis re-solves without pivots; a ch
   CHECK(warm.iterations <= cold.iterations);
 }
 
-TEST_CASE("a warm-start basis of the wrong shape is a malformed problem; a backend without bases ignores one") {
+TEST_CASE("a warm-start basis of the wrong shape is a malformed problem, a backend without bases ignores one") {
   Problem p = linear_programs()[0].problem;
   p.warm_start.variables = {BasisStatus::kBasic};
   p.warm_start.rows = {BasisStatus::kBasic, BasisStatus::kBasic};

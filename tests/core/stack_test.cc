@@ -32,7 +32,7 @@ TEST_CASE("a well-formed stack parses with defaults") {
   CHECK(s.blocks[1].x == -0.2);
 }
 
-TEST_CASE("blocks that touch in a row are valid; a floating block is valid input") {
+TEST_CASE("blocks that touch in a row are valid, a floating block is valid input") {
   CHECK(error_of(R"({"blocks": [{"row": 0, "x": -2}, {"row": 0, "x": -1}, {"row": 3, "x": 5}]})").empty());
 }
 

@@ -23,7 +23,7 @@ const Annotator kAll[] = {Annotator::kExact, Annotator::kPaper, Annotator::kBala
 
 }  // namespace
 
-TEST_CASE("every fixture stack is balanced; pushing its rightmost block right by 1e-3 unbalances it") {
+TEST_CASE("every fixture stack is balanced, pushing its rightmost block right by 1e-3 unbalances it") {
   for (const Stack& s : fixture_stacks()) {
     for (const char* solver : {"clp", "nlopt"}) {
       for (Annotator a : kAll) {
@@ -36,7 +36,7 @@ TEST_CASE("every fixture stack is balanced; pushing its rightmost block right by
   }
 }
 
-TEST_CASE("harmonic stacks of 2..50 blocks: balanced; 1e-3 further out unbalanced; 1e-3 back balanced") {
+TEST_CASE("harmonic stacks of 2..50 blocks: balanced, 1e-3 further out unbalanced, 1e-3 back balanced") {
   for (int n = 2; n <= 50; ++n) {
     const Stack s = harmonic_stack(n);
     for (Annotator a : kAll) {

@@ -218,7 +218,7 @@ TEST_CASE("measured positions: stable, falls or knife edge with the floor, margi
   CHECK_FALSE(failed.counts_for_max);
 }
 
-TEST_CASE("vision's own uncertainty counts when above the floor; a bad one is an invalid stack") {
+TEST_CASE("vision's own uncertainty counts when above the floor, a bad one is an invalid stack") {
   PredictionLogic logic(PredictionConfig{});
   bricklayer::stack_t s = one_block(-0.5 - 0.008);  // 0.008 inside: stable with the floor ...
   CHECK(logic.answer(s).raw_verdict == prediction_t::VERDICT_STABLE);

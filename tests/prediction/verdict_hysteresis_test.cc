@@ -57,7 +57,7 @@ TEST_CASE("jitter across the boundary: one change, then no flicker") {
   CHECK(shown.back() == kKnife);
 }
 
-TEST_CASE("never more certain than the stack's own verdict; failures show a knife edge and keep the state") {
+TEST_CASE("never more certain than the stack's own verdict, failures show a knife edge and keep the state") {
   VerdictHysteresis h;
   for (int8_t raw : {kStable, kKnife, kFalls, kKnife, kStable, kFalls, kStable}) {
     for (double m : {0.5, 1.2, 3.0}) {

@@ -10,7 +10,7 @@ namespace {
 constexpr int64_t kS = 1'000'000;
 }
 
-TEST_CASE("no stacks for longer than the limit: camera not seeing; no predictions: waiting for the other machine") {
+TEST_CASE("no stacks for longer than the limit: camera not seeing, no predictions: waiting for the other machine") {
   const int64_t t0 = 1'781'000'000'000'000;
   InputWatch w(t0, 3 * kS);
   CHECK(w.problem(t0 + 3 * kS) == InputProblem::kNone);  // at the limit: not yet

@@ -18,7 +18,7 @@ TEST_CASE("the margin as players read it") {
   CHECK(margin_text(std::nan("")).empty());
 }
 
-TEST_CASE("only a knife edge outlines its deciding blocks, in a slow red pulse; no prediction, no look") {
+TEST_CASE("only a knife edge outlines its deciding blocks, in a slow red pulse, no prediction, no look") {
   prediction_t p{};
   p.status = prediction_t::STATUS_OK;
   p.verdict = prediction_t::VERDICT_KNIFE_EDGE;

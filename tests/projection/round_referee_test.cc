@@ -160,7 +160,7 @@ TEST_CASE("a round lasts its duration, and ends early when the board stays empty
   CHECK(e.last_round()->most_blocks == 3);
 }
 
-TEST_CASE("MAX takes only balanced scores while a round runs; the history keeps it with its blocks") {
+TEST_CASE("MAX takes only balanced scores while a round runs, the history keeps it with its blocks") {
   const int64_t t0 = local_noon(2026, 6, 15);
   RoundReferee r(quick_rules());
   r.pile(t0, 200, true, 3);  // idle: shown as score, not MAX

@@ -127,7 +127,7 @@ TEST_CASE("a failed prediction forgets the colours") {
   CHECK(state_of(s, 1) == BlockState::kUnknown);
 }
 
-TEST_CASE("the collapse preview shows only for the drawn frame; the hint stays until cleared") {
+TEST_CASE("the collapse preview shows only for the drawn frame, the hint stays until cleared") {
   Scene s;
   s.set_stack(make_stack(4, {{1, 0, 0.6}}));
   collapse_preview_t preview{};

@@ -103,10 +103,14 @@ std::vector<Hostile> hostile_predictions() {
   p.balanced = true;
   p.num_blocks = 2;
   p.blocks.resize(2);
-  // num_blocks is the last field before the blocks (each id 8 + state 1 + accel 8 + alpha 8 = 25 bytes):
-  // its offset after the 8-byte fingerprint follows from the encoded size, whatever fields precede it.
+  // num_blocks is the last field before the blocks: its offset follows from the encoded sizes with two
+  // blocks and with none, whatever fields precede it and however large a block entry is.
   const std::vector<uint8_t> encoded = test::encode_bytes(p);
-  const size_t num_blocks_offset = encoded.size() - 8 - 2 * 25 - 4;
+  prediction_t none = p;
+  none.num_blocks = 0;
+  none.blocks.clear();
+  const size_t blocks_bytes = encoded.size() - test::encode_bytes(none).size();
+  const size_t num_blocks_offset = encoded.size() - 8 - blocks_bytes - 4;  // after the 8-byte fingerprint
   out.push_back({"prediction num_blocks 2^31-1 with 2 blocks", ch,
                  patch_i32(encoded, num_blocks_offset, std::numeric_limits<int32_t>::max())});
   auto nan = p;

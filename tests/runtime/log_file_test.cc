@@ -102,7 +102,7 @@ TEST_CASE("a log that ends inside an event is reported as truncated") {
   CHECK(r.damage[0].describe().find("truncated") != std::string::npos);
 }
 
-TEST_CASE("garbage before, between and after events is skipped and reported; a clean log has no damage") {
+TEST_CASE("garbage before, between and after events is skipped and reported, a clean log has no damage") {
   ScratchDir dir("logfile");
   write_file(dir / "junk.lcmlog", std::string("\xED\xA1junk", 6) + event_bytes(0, 10, "BL_A", "a") + "zz" +
                                       event_bytes(1, 20, "BL_B", "b") + "x");

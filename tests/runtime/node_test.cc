@@ -89,7 +89,7 @@ TEST_CASE("heartbeats come once a second of the bus clock, with counters, values
   CHECK(harness::heartbeat_value(beats.back(), "ticks").value_or(0) > 100);
 }
 
-TEST_CASE("malformed, oversized and refused inputs are counted errors; the node keeps working") {
+TEST_CASE("malformed, oversized and refused inputs are counted errors, the node keeps working") {
   harness::Rig rig;
   auto& echo = rig.add<EchoNode>(EchoConfig{});
   auto& rec = rig.record({"ECHO"});

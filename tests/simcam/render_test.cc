@@ -56,7 +56,7 @@ double line_centre(const cv::Mat& g, int v, double u, double left_bg, double rig
 
 }  // namespace
 
-TEST_CASE("render: the same inputs and seed give identical frames; another seed other noise") {
+TEST_CASE("render: the same inputs and seed give identical frames, another seed other noise") {
   core::Stack s = random_pile(3, {.blocks = 25});
   Nuisance n = Nuisance::level(3);
   Renderer r(CameraSetup::random(11), ProjectorSetup::random(11));

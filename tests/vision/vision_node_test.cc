@@ -117,7 +117,7 @@ TEST_CASE("with --require-calibration the vision node publishes nothing until a 
   CHECK(short_stacks == 0);
 }
 
-TEST_CASE("a corrupt frame is a no-frame stack and a counted error; the next good frame is measured") {
+TEST_CASE("a corrupt frame is a no-frame stack and a counted error, the next good frame is measured") {
   harness::Rig rig;
   auto& node = rig.add<vision::VisionNode>(vision::VisionConfig{});
   auto& rec = rig.record({kStacks});
