@@ -11,6 +11,7 @@ constexpr const char* kPage = R"HTML(<!DOCTYPE html>
 <meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <title>Bricklayer status</title>
+<link rel="icon" href="data:,">
 <style>
   body { font-family: system-ui, sans-serif; margin: 0; padding: 12px; background: #f4f4f4; color: #222; }
   h1 { font-size: 1.3em; margin: 0 0 8px 0; }

@@ -1,0 +1,86 @@
+// Opens the status page in Debian's Chromium (headless, through playwright-core from
+// modules/inspect/js/node_modules: one pinned copy for the project, no browser download) and says what
+// an operator would see: console messages, page errors, failed requests, the top line, the problems
+// and every module's row (its level and cells).
+// Usage: node status_page_check.mjs URL [--screenshot OUT.png] [--watch MODULE] [--timeout-s S]
+//   --watch MODULE: once MODULE's row is ok, prints "watching" on stderr, then records every change of
+//   the row's level until it has been something else and ok again (or the timeout): the test kills
+//   the module meanwhile.
+// Prints one JSON object on stdout; exits 2 when the browser cannot be started or the page not opened.
+import { createRequire } from "node:module";
+import { dirname, join } from "node:path";
+import { fileURLToPath } from "node:url";
+
+const here = dirname(fileURLToPath(import.meta.url));
+const require = createRequire(join(here, "..", "..", "inspect", "js", "package.json"));
+let chromium;
+try {
+  ({ chromium } = require("playwright-core"));
+} catch (e) {
+  console.error("status_page_check: playwright-core is not installed: run npm ci in modules/inspect/js (" + e.message + ")");
+  process.exit(2);
+}
+
+const args = process.argv.slice(2);
+const url = args[0];
+const option = (name) => (args.indexOf(name) >= 0 ? args[args.indexOf(name) + 1] : undefined);
+if (!url) {
+  console.error("usage: node status_page_check.mjs URL [--screenshot OUT.png] [--watch MODULE] [--timeout-s S]");
+  process.exit(2);
+}
+const timeout_ms = 1000 * Number(option("--timeout-s") ?? 30);
+let browser;
+try {
+  browser = await chromium.launch({
+    executablePath: option("--chromium") ?? "/usr/bin/chromium",
+    args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
+           "--disable-component-update", "--disable-sync"],
+  });
+} catch (e) {
+  console.error(`status_page_check: cannot start Chromium: ${e.message}`);
+  process.exit(2);
+}
+const result = { console: [], errors: [], failed_requests: [], transitions: [] };
+const rows = (page) => page.evaluate(() => [...document.querySelectorAll("tr[data-module]")].map((r) => ({
+  module: r.dataset.module, level: r.className, cells: [...r.cells].map((c) => c.textContent) })));
+try {
+  // A phone's width: the page is meant for one.
+  const page = await browser.newPage({ viewport: { width: 420, height: 900 }, deviceScaleFactor: 2 });
+  page.on("console", (m) => result.console.push({ type: m.type(), text: m.text() }));
+  page.on("pageerror", (e) => result.errors.push(String(e)));
+  page.on("requestfailed", (r) => result.failed_requests.push(r.url().slice(0, 120)));
+  await page.goto(url, { waitUntil: "load" });
+  result.title = await page.title();
+  // The first answer of /state.json has been drawn once a module row is there.
+  await page.waitForSelector("tr[data-module]", { timeout: timeout_ms });
+  const watch = option("--watch");
+  if (watch) {
+    const level = async () => (await rows(page)).find((r) => r.module === watch)?.level ?? "absent";
+    const end = Date.now() + timeout_ms;
+    while ((await level()) !== "ok" && Date.now() < end) await page.waitForTimeout(100);
+    let last = await level();
+    result.transitions.push(last);
+    console.error("watching");
+    let left_ok = false;
+    while (Date.now() < end && !(left_ok && last === "ok")) {
+      await page.waitForTimeout(100);
+      const now = await level();
+      if (now !== last) {
+        result.transitions.push(now);
+        if (now !== "ok") left_ok = true;
+        last = now;
+      }
+    }
+  }
+  result.overall = await page.textContent("#overall");
+  result.problems = await page.evaluate(() => [...document.querySelectorAll("#problems li")].map((l) => l.textContent));
+  result.rows = await rows(page);
+  const shot = option("--screenshot");
+  if (shot) await page.screenshot({ path: shot, fullPage: true });
+} catch (e) {
+  console.error(`status_page_check: ${e.message}`);
+  await browser.close();
+  process.exit(2);
+}
+await browser.close();
+console.log(JSON.stringify(result));

@@ -1,0 +1,133 @@
+// NETNS, real processes and a real browser: a real bricklayer-launch and bricklayer-status, the page
+// opened in Debian's headless Chromium (modules/status/js/status_page_check.mjs, playwright-core). The
+// page loads with no console errors, shows each module's state and the problems in words; a module
+// killed with -9 turns to a warning on the page and back to ok. The screenshot it takes is the one in
+// the README (build/test-output/status/status-page.png, copied to docs/status-page.png).
+#include <signal.h>
+
+#include <httplib.h>
+
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "bricklayer/launcher/process.h"
+#include "harness/program.h"
+#include "harness/scratch.h"
+
+using namespace bricklayer;
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
+constexpr int kPort = 18081;
+const std::string kScript = std::string(BRICKLAYER_SOURCE_DIR) + "/modules/status/js/status_page_check.mjs";
+const std::string kPage = "http://127.0.0.1:" + std::to_string(kPort) + "/";
+
+// The prediction module's pid once the status page shows it up (0 if it never does).
+int prediction_pid_when_up(std::chrono::seconds timeout) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < end) {
+    httplib::Client client("127.0.0.1", kPort);
+    if (auto res = client.Get("/state.json"); res && res->status == 200) {
+      const json j = json::parse(res->body);
+      for (const auto& h : j["hosts"])
+        for (const auto& m : h["modules"])
+          if (m["name"] == "prediction" && m["state"] == "up") return m["pid"].get<int>();
+    }
+    std::this_thread::sleep_for(200ms);
+  }
+  return 0;
+}
+
+// What a program wrote on stderr so far; "" until the child has opened the file (just after the spawn).
+std::string stderr_of(const harness::Program& p) {
+  try {
+    return p.stderr_text();
+  } catch (const std::exception&) {
+    return "";
+  }
+}
+
+json row(const json& result, const std::string& module) {
+  for (const auto& r : result.at("rows"))
+    if (r.at("module") == module) return r;
+  return nullptr;
+}
+}  // namespace
+
+TEST_CASE("the status page in Chromium: no console errors, the modules' states, a kill -9 and the recovery") {
+  const std::string node = launcher::find_program("node", "", {});
+  REQUIRE_FALSE(node.empty());
+  REQUIRE(fs::exists("/usr/bin/chromium"));
+  harness::ScratchDir dir("status-browser");
+  std::ofstream(dir / "camera.json") << R"({"modules":[
+      {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]},
+      {"name":"broken","command":["/bin/false"],"heartbeat":"broken","backoff_max_s":0.3}]})";
+  harness::Program status("bricklayer-status", {"--lcm-url", kUrl, "--port", std::to_string(kPort)});
+  harness::Program launch("bricklayer-launch",
+                          {"--root", dir.str(), "--bin-dir", std::string(BRICKLAYER_BINARY_DIR) + "/bin", "--lcm-url", kUrl,
+                           (dir / "camera.json").string(), "--host-name", "camera-host"},
+                          {{"DISPLAY="}});
+  const int pid = prediction_pid_when_up(20s);
+  INFO("status: " << status.stderr_text() << "\nlaunch: " << launch.stderr_text());
+  REQUIRE(pid > 0);
+
+  const fs::path out_dir = fs::path(BRICKLAYER_BINARY_DIR) / "test-output" / "status";
+  fs::create_directories(out_dir);
+  const fs::path shot = out_dir / "status-page.png";
+  fs::remove(shot);
+  harness::Ran page = harness::run_program(node, {kScript, kPage, "--screenshot", shot.string()}, 60s);
+  INFO(page.err);
+  REQUIRE(page.status.code == 0);
+  const json result = json::parse(page.out);
+  INFO(page.out);
+  CHECK(result.at("title") == "Bricklayer status");
+  CHECK(result.at("console").empty());
+  CHECK(result.at("errors").empty());
+  CHECK(result.at("failed_requests").empty());
+  const json prediction = row(result, "prediction");
+  REQUIRE(prediction.is_object());
+  CHECK(prediction.at("level") == "ok");
+  CHECK(prediction.at("cells").at(1) == "up");
+  const json broken = row(result, "broken");
+  REQUIRE(broken.is_object());
+  CHECK(broken.at("level") == "warning");
+  CHECK(result.at("overall") == "Something needs a look.");
+  bool said = false;
+  // Between its restarts the failing module is starting or restarting: either way, said.
+  for (const auto& p : result.at("problems")) said = said || p.get<std::string>().rfind("broken: ", 0) == 0;
+  CHECK(said);
+  REQUIRE(fs::exists(shot));
+  CHECK(fs::file_size(shot) > 10000);
+
+  // Watching the page while prediction is killed with -9: ok, a warning, ok again.
+  harness::Program watch(node, {kScript, kPage, "--watch", "prediction", "--timeout-s", "40"});
+  const auto end = std::chrono::steady_clock::now() + 30s;
+  while (stderr_of(watch).find("watching") == std::string::npos && watch.running() && std::chrono::steady_clock::now() < end)
+    std::this_thread::sleep_for(100ms);
+  REQUIRE(stderr_of(watch).find("watching") != std::string::npos);
+  REQUIRE(::kill(pid, SIGKILL) == 0);
+  const auto ended = watch.wait_exit(60s);
+  REQUIRE(ended);
+  INFO(watch.stderr_text());
+  CHECK(ended->code == 0);
+  const json watched = json::parse(watch.stdout_text());
+  INFO(watched.dump());
+  const json& t = watched.at("transitions");
+  REQUIRE(t.size() >= 3);
+  CHECK(t.front() == "ok");
+  CHECK(t.at(1) == "warning");
+  CHECK(t.back() == "ok");
+  CHECK(watched.at("errors").empty());
+  CHECK(watched.at("console").empty());
+  const json again = row(watched, "prediction");
+  REQUIRE(again.is_object());
+  CHECK(again.at("cells").at(2) != "0");  // restarts
+}
