@@ -13,6 +13,8 @@ TEST_CASE("the best-overhang table is read by block count") {
   CHECK(*t.best_for(1) == 0.5);
   CHECK(*t.best_for(30) == Approx(2.70909));
   CHECK_FALSE(t.best_for(3));
+  CHECK(t.largest() == 30);
+  CHECK(BestOverhang{}.largest() == 0);
   CHECK_FALSE(t.best_for(0));
 }
 

@@ -193,6 +193,15 @@ TEST_CASE("score, MAX, closeness and timer are drawn as text, top right and top 
   cv::Mat without = f.draw(scene, board::BoardToProjector{}, hud);
   CHECK(f.renderer.layout().best.w == 0);
   CHECK(lit_pixels(without, layout.best) < lit_pixels(frame, layout.best));
+
+  // A pile larger than the table: said plainly, on the same line.
+  hud.best_known_up_to = hud.num_blocks - 1;
+  cv::Mat beyond = f.draw(scene, board::BoardToProjector{}, hud);
+  CHECK(f.renderer.layout().best.w > 0);
+  CHECK(lit_pixels(beyond, f.renderer.layout().best) > 100);
+  hud.best_known_up_to = hud.num_blocks;  // within the table but no entry: nothing
+  f.draw(scene, board::BoardToProjector{}, hud);
+  CHECK(f.renderer.layout().best.w == 0);
 }
 
 TEST_CASE("the miniature shows the pile with its colours, the collapse ghost and the hint, green stays 0") {

@@ -158,6 +158,12 @@ void GameRenderer::draw_hud(const Hud& hud) {
                   hud.num_blocks == 1 ? "" : "s", *hud.best_overhang);
     layout_.best = draw_text(kBest, font_small_, buffer, kTextDim, right, y, 2);
     y = layout_.best.y + std::max(layout_.best.h, TTF_FontLineSkip(font_small_));
+  } else if (hud.best_known_up_to > 0 && hud.num_blocks > hud.best_known_up_to) {
+    // Said plainly rather than left out, so a player with a big pile knows why there is no percentage.
+    const std::string line = "no best known for " + std::to_string(hud.num_blocks) + " blocks (the table goes to " +
+                             std::to_string(hud.best_known_up_to) + ")";
+    layout_.best = draw_text(kBest, font_small_, line, kTextDim, right, y, 2);
+    y = layout_.best.y + std::max(layout_.best.h, TTF_FontLineSkip(font_small_));
   } else {
     layout_.best = SDL_Rect{};
   }

@@ -396,6 +396,7 @@ void ProjectionNode::draw_and_present() {
     hud.num_blocks = static_cast<int>(scene_.blocks().size());
     hud.overhang = scene_.overhang();
     hud.best_overhang = best_overhang_.best_for(hud.num_blocks);
+    hud.best_known_up_to = best_overhang_.largest();
     renderer_->draw_game(scene_, mapping_, hud, (t - start_utime_) / 1000);
   }
   display_->present();

@@ -1,5 +1,5 @@
 // The best possible overhang for n blocks (block lengths), from the planner's table
-// modules/planner/data/best_overhang.json: {"1": 0.5, "2": 0.75, ..., "30": 2.70909}.
+// modules/planner/data/best_overhang.json: {"1": 0.5, "2": 0.75, ..., "30": 2.70909, ...}.
 #pragma once
 
 #include <map>
@@ -20,6 +20,8 @@ class BestOverhang {
   std::optional<double> best_for(int num_blocks) const;
   bool empty() const { return table_.empty(); }
   size_t size() const { return table_.size(); }
+  // The largest block count the table knows (0 when empty).
+  int largest() const { return table_.empty() ? 0 : table_.rbegin()->first; }
 
  private:
   std::map<int, double> table_;

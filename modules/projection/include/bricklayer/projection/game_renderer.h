@@ -41,7 +41,8 @@ struct Hud {
   std::string notice;                   // an input problem in words ("camera not seeing"); "" = none
   int num_blocks = 0;
   double overhang = 0;                  // block lengths
-  std::optional<double> best_overhang;  // best possible for num_blocks; nothing = line not shown
+  std::optional<double> best_overhang;  // best possible for num_blocks; nothing = no percentage line
+  int best_known_up_to = 0;             // the table's largest block count: a larger pile is told so
 };
 
 // Where the parts of the display were drawn in the last frame (projector pixels). Text rectangles
