@@ -21,8 +21,10 @@
 #include "bricklayer/command_t.hpp"
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/hint_t.hpp"
+#include "bricklayer/host_state_t.hpp"
 #include "bricklayer/node_config_t.hpp"
 #include "bricklayer/study_answer_t.hpp"
+#include "bricklayer/study_command_t.hpp"
 #include "bricklayer/study_problem_t.hpp"
 #include "bricklayer/study_session_t.hpp"
 #include "bricklayer/study_trial_t.hpp"
@@ -125,7 +127,8 @@ bool generated_type(const Event& e) {
       image_t::getHash(), stack_t::getHash(), prediction_t::getHash(), timing_t::getHash(), heartbeat_t::getHash(),
       command_t::getHash(), calibration_t::getHash(), round_t::getHash(), projector_state_t::getHash(),
       collapse_preview_t::getHash(), hint_t::getHash(), node_config_t::getHash(), study_session_t::getHash(),
-      study_trial_t::getHash(), study_problem_t::getHash(), study_answer_t::getHash()};
+      study_trial_t::getHash(), study_problem_t::getHash(), study_answer_t::getHash(), study_command_t::getHash(),
+      host_state_t::getHash()};
   return std::find(hashes.begin(), hashes.end(), e.fingerprint()) != hashes.end();
 }
 
@@ -146,17 +149,20 @@ TEST_CASE("the CSV and JSON-lines exports hold every message of the recorded dem
   REQUIRE(r.code == 0);
 
   // Expected messages and rows per channel, from lcm-gen's classes: one row per block (stacks,
-  // predictions), per named value (heartbeats), else one; an empty array still one row.
+  // predictions), per named value (heartbeats), per module (host states), else one; an empty array still
+  // one row.
   std::map<std::string, uint64_t> expected_messages, expected_rows;
   uint64_t undecoded = 0;
   for (const Event& e : lcm_events(kDemoLog)) {
     stack_t s;
     prediction_t p;
     heartbeat_t h;
+    host_state_t hs;
     uint64_t rows = 1;
     if (decode(e, s)) rows = std::max<uint64_t>(1, s.blocks.size());
     else if (decode(e, p)) rows = std::max<uint64_t>(1, p.blocks.size());
     else if (decode(e, h)) rows = std::max<uint64_t>(1, h.values.size());
+    else if (decode(e, hs)) rows = std::max<uint64_t>(1, hs.modules.size());
     else if (!generated_type(e)) {
       ++undecoded;
       continue;
