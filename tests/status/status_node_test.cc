@@ -7,6 +7,7 @@
 #include "bricklayer/common/channels.h"
 #include "bricklayer/launcher/supervisor.h"
 #include "bricklayer/status/status_node.h"
+#include "bricklayer/status/status_server.h"
 #include "harness/rig.h"
 
 using namespace bricklayer;
@@ -99,4 +100,13 @@ TEST_CASE("a port already in use is a clear error") {
   auto& first = rig.add<status::StatusNode>(config);
   config.port = first.port();
   CHECK_THROWS_WITH(rig.add<status::StatusNode>(config), Catch::Contains("cannot listen on 127.0.0.1:"));
+}
+
+TEST_CASE("a server destroyed right after it was built stops (its thread may not be listening yet)") {
+  // Without the destructor waiting for the thread to listen, this hangs in its join (stop() came first).
+  status::StatusBoard board;
+  for (int i = 0; i < 50; ++i) {
+    status::StatusServer server(board, "127.0.0.1", 0);
+    CHECK(server.port() > 0);
+  }
 }

@@ -3,6 +3,7 @@
 #include <httplib.h>
 #include <sys/socket.h>
 
+#include <chrono>
 #include <stdexcept>
 
 #include "bricklayer/status/status_page.h"
@@ -39,10 +40,16 @@ StatusServer::StatusServer(const StatusBoard& board, const std::string& listen, 
                                " (the port is in use, or the address is not this machine's)");
     port_ = port;
   }
-  thread_ = std::thread([this] { server_->listen_after_bind(); });
+  thread_ = std::thread([this] {
+    server_->listen_after_bind();
+    serving_done_ = true;
+  });
 }
 
 StatusServer::~StatusServer() {
+  // httplib's stop() does nothing before the server thread has started listening, and the thread would
+  // then listen forever: a server destroyed right after it was built waits for its thread to begin.
+  while (!server_->is_running() && !serving_done_) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   server_->stop();
   if (thread_.joinable()) thread_.join();
 }

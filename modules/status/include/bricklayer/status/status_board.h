@@ -45,8 +45,8 @@ class StatusBoard {
 
   // The bus time the next render is relative to (host ages, "silent for N s").
   void set_now(int64_t utime);
-  // A host's latest state replaces its previous one (hosts are told apart by name and launcher pid
-  // only by name: a restarted launcher takes its host's place).
+  // A host's latest state replaces its previous one. Hosts are told apart by name only, so a restarted
+  // launcher (a new pid) takes its host's place instead of leaving a silent twin on the page.
   void update(const host_state_t& state, int64_t received_utime);
   void update(const round_t& round);
 

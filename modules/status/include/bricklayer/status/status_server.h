@@ -35,6 +35,7 @@ class StatusServer {
   std::unique_ptr<httplib::Server> server_;
   int port_ = 0;
   std::atomic<int64_t> requests_{0}, not_found_{0};
+  std::atomic<bool> serving_done_{false};  // the server thread's listen has returned
   std::thread thread_;
 };
 
