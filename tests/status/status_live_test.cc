@@ -77,7 +77,8 @@ TEST_CASE("bricklayer-status serves a real launcher's host state, a kill -9 and 
   const nlohmann::json* broken = find_module(s, "camera-host", "broken");
   REQUIRE(prediction);
   REQUIRE(broken);
-  CHECK((*prediction)["level"] == "ok");
+  // ok, or (once up 5 s without vision) a warning in its own words.
+  CHECK(((*prediction)["level"] == "ok" || (*prediction)["status"].get<std::string>().rfind("no stacks for", 0) == 0));
   const int pid = (*prediction)["pid"].get<int>();
   REQUIRE(pid > 0);
   CHECK(::kill(pid, 0) == 0);  // the page's pid is the living process's

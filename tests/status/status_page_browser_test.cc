@@ -94,8 +94,15 @@ TEST_CASE("the status page in Chromium: no console errors, the modules' states, 
   CHECK(result.at("failed_requests").empty());
   const json prediction = row(result, "prediction");
   REQUIRE(prediction.is_object());
-  CHECK(prediction.at("level") == "ok");
   CHECK(prediction.at("cells").at(1) == "up");
+  // Up; ok while its own status is, else a warning in its own words (prediction says "no stacks for
+  // N s" once it has been up 5 s without vision, as here).
+  if (prediction.at("cells").at(4) == "ok") {
+    CHECK(prediction.at("level") == "ok");
+  } else {
+    CHECK(prediction.at("level") == "warning");
+    CHECK(prediction.at("cells").at(4).get<std::string>().rfind("no stacks for", 0) == 0);
+  }
   const json broken = row(result, "broken");
   REQUIRE(broken.is_object());
   CHECK(broken.at("level") == "warning");
@@ -107,7 +114,8 @@ TEST_CASE("the status page in Chromium: no console errors, the modules' states, 
   REQUIRE(fs::exists(shot));
   CHECK(fs::file_size(shot) > 10000);
 
-  // Watching the page while prediction is killed with -9: ok, a warning, ok again.
+  // Watching the page while prediction is killed with -9: up, then restarting or starting (a warning),
+  // then up again.
   harness::Program watch(node, {kScript, kPage, "--watch", "prediction", "--timeout-s", "40"});
   const auto end = std::chrono::steady_clock::now() + 30s;
   while (stderr_of(watch).find("watching") == std::string::npos && watch.running() && std::chrono::steady_clock::now() < end)
@@ -121,10 +129,17 @@ TEST_CASE("the status page in Chromium: no console errors, the modules' states, 
   const json watched = json::parse(watch.stdout_text());
   INFO(watched.dump());
   const json& t = watched.at("transitions");
-  REQUIRE(t.size() >= 3);
-  CHECK(t.front() == "ok");
-  CHECK(t.at(1) == "warning");
-  CHECK(t.back() == "ok");
+  REQUIRE(t.size() >= 2);
+  CHECK(t.front().at("state") == "up");
+  CHECK(t.back().at("state") == "up");
+  for (const auto& e : t) {  // while it was not up, a warning (its "no stacks" warning may come before)
+    if (e.at("state") == "up") continue;
+    CHECK((e.at("state") == "restarting" || e.at("state") == "starting"));
+    CHECK(e.at("level") == "warning");
+  }
+  // The page polls once a second and the launcher publishes once a second: a quick restart may show
+  // only as the restart count going up, with a new pid.
+  CHECK(t.back().at("restarts").get<int>() > t.front().at("restarts").get<int>());
   CHECK(watched.at("errors").empty());
   CHECK(watched.at("console").empty());
   const json again = row(watched, "prediction");

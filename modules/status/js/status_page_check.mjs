@@ -3,9 +3,8 @@
 // an operator would see: console messages, page errors, failed requests, the top line, the problems
 // and every module's row (its level and cells).
 // Usage: node status_page_check.mjs URL [--screenshot OUT.png] [--watch MODULE] [--timeout-s S]
-//   --watch MODULE: once MODULE's row is ok, prints "watching" on stderr, then records every change of
-//   the row's level until it has been something else and ok again (or the timeout): the test kills
-//   the module meanwhile.
+//   --watch MODULE: once MODULE's row says "up", prints "watching" on stderr, then records every change
+//   of the row's state, level and restarts until it has restarted and is up again (or the timeout): the test kills the module meanwhile.
 // Prints one JSON object on stdout; exits 2 when the browser cannot be started or the page not opened.
 import { createRequire } from "node:module";
 import { dirname, join } from "node:path";
@@ -55,19 +54,23 @@ try {
   await page.waitForSelector("tr[data-module]", { timeout: timeout_ms });
   const watch = option("--watch");
   if (watch) {
-    const level = async () => (await rows(page)).find((r) => r.module === watch)?.level ?? "absent";
+    const seen = async () => {
+      const r = (await rows(page)).find((x) => x.module === watch);
+      return r ? { state: r.cells[1], level: r.level, restarts: Number(r.cells[2]) } : { state: "absent", level: "absent", restarts: -1 };
+    };
     const end = Date.now() + timeout_ms;
-    while ((await level()) !== "ok" && Date.now() < end) await page.waitForTimeout(100);
-    let last = await level();
+    while ((await seen()).state !== "up" && Date.now() < end) await page.waitForTimeout(100);
+    let last = await seen();
     result.transitions.push(last);
     console.error("watching");
-    let left_ok = false;
-    while (Date.now() < end && !(left_ok && last === "ok")) {
+    // A restart faster than the launcher's once-a-second state may never show as "restarting": the
+    // restart count going up says it happened.
+    const first = last.restarts;
+    while (Date.now() < end && !(last.restarts > first && last.state === "up")) {
       await page.waitForTimeout(100);
-      const now = await level();
-      if (now !== last) {
+      const now = await seen();
+      if (now.state !== last.state || now.level !== last.level || now.restarts !== last.restarts) {
         result.transitions.push(now);
-        if (now !== "ok") left_ok = true;
         last = now;
       }
     }
