@@ -231,11 +231,12 @@ void LoggerNode::before_stop() {
     if (!step(50)) break;
   }
   for (Event& e : policy_.release_all()) writer_->push(std::move(e));
+  const std::string last_file = writer_->stats().current_file;  // stop() closes it and forgets its name
   writer_->stop();
   update_figures();
   const WriterStats w = writer_->stats();
   log::info("stopped: ", counters().received, " received, ", w.written, " written (", w.bytes, " bytes, ", w.files,
-            " file(s), last ", w.current_file, "), ", w.dropped, " dropped (queue full), ", kernel_drops_,
+            " file(s), last ", last_file.empty() ? std::string("none") : last_file, "), ", w.dropped, " dropped (queue full), ", kernel_drops_,
             " kernel drops, ", gaps_.load(), " sequence gaps, ", w.write_errors, " write errors, ", w.lost,
             " not kept (disk full or over budget), ", excluded_, " excluded; ", w.deleted_files, " old file(s) deleted (",
             mb(w.deleted_bytes), "), the series holds ", mb(w.series_bytes), ", ", mb(w.free_bytes), " free; frames ",
