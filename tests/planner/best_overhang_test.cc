@@ -113,21 +113,24 @@ TEST_CASE("bad layouts get a clear error or no answer, never a crash") {
   CHECK_FALSE(planner::optimise_layout({{0, 5.0}}, 0));
 }
 
-TEST_CASE("the shipped table has the known values and reaches 2.70 at n = 30") {
+TEST_CASE("the shipped table has the known values, reaches 2.70 at n = 30 and never falls with n") {
   const nlohmann::json table = load(kData + "best_overhang.json");
-  for (int n = 1; n <= 30; ++n) REQUIRE(table.contains(std::to_string(n)));
+  const int largest = static_cast<int>(table.size());
+  REQUIRE(largest >= 30);
+  for (int n = 1; n <= largest; ++n) REQUIRE(table.contains(std::to_string(n)));  // 1..largest, no gaps
   for (int n = 3; n <= 6; ++n) CHECK(table[std::to_string(n)].get<double>() == Approx(published(n)).margin(1e-4));
   const double at30 = table["30"].get<double>();
   CHECK(at30 >= 2.70);
   CHECK(at30 <= published(30) + 1e-5);  // the published optimum: more would mean a wrong model
-  for (int n = 2; n <= 30; ++n)  // one more block never reaches less
+  for (int n = 2; n <= largest; ++n)  // one more block never reaches less
     CHECK(table[std::to_string(n)].get<double>() >= table[std::to_string(n - 1)].get<double>() - 1e-12);
 }
 
 TEST_CASE("every shipped stack is balanced by the exact annotator and reaches its table value") {
   const nlohmann::json table = load(kData + "best_overhang.json");
   const nlohmann::json stacks = load(kData + "best_overhang_stacks.json");
-  for (int n = 1; n <= 30; ++n) {
+  REQUIRE(stacks.size() == table.size());
+  for (int n = 1; n <= static_cast<int>(table.size()); ++n) {
     INFO("n = " << n);
     const auto& entry = stacks.at(std::to_string(n));
     core::Stack s;
