@@ -43,8 +43,13 @@ struct SmallDisk {
   // Bytes of the recording's files (parts and index).
   int64_t series_bytes(const std::string& prefix) const {
     int64_t n = 0;
-    for (const auto& e : fs::directory_iterator(mnt))
-      if (e.path().filename().string().rfind(prefix, 0) == 0) n += static_cast<int64_t>(e.file_size());
+    // The logger deletes old parts while this runs: a file gone between the listing and its size counts 0.
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(mnt, ec)) {
+      if (e.path().filename().string().rfind(prefix, 0) != 0) continue;
+      const auto size = fs::file_size(e.path(), ec);
+      if (!ec) n += static_cast<int64_t>(size);
+    }
     return n;
   }
   std::vector<fs::path> parts(const std::string& prefix) const {
