@@ -28,7 +28,8 @@ TEST_CASE("study session process: a pause that does not apply yet and an abort, 
                             "--clear-seconds", "0", "--problem-1", problems + "stabilise-two.json", "--problem-2",
                             problems + "stabilise-one.json", "--problem-3", problems + "score-100-four.json",
                             "--lcm-url", url});
-  REQUIRE(rec.wait_for_heartbeat("study-session", {}, 10s));
+  // Under the sanitizers its first heartbeat was seen to take more than 10 s: a bound for a hang, not a speed.
+  REQUIRE(rec.wait_for_heartbeat("study-session", {}, 60s));
   const auto ready = rec.wait_for<S>(channel(study::kSessionChannel), [](const S& s) {
     return s.session_id == "live-p42" && s.step == S::STEP_TRIAL_1;
   });
