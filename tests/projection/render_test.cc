@@ -213,6 +213,8 @@ TEST_CASE("the miniature shows the pile with its colours, the collapse ghost and
   preview.frame_number = 7;
   preview.num_blocks = 3;
   preview.block_ids = {1, 2, 3};
+  preview.end_state = {collapse_preview_t::END_UNTOUCHED, collapse_preview_t::END_AT_REST,
+                       collapse_preview_t::END_FELL_OFF};
   preview.num_frames = 2;
   preview.time_s = {0.0, 0.4};
   preview.num_values = 18;

@@ -134,6 +134,7 @@ TEST_CASE("the collapse preview shows only for the drawn frame, the hint stays u
   preview.frame_number = 3;
   preview.num_blocks = 1;
   preview.block_ids = {1};
+  preview.end_state = {collapse_preview_t::END_FELL_OFF};
   preview.num_frames = 1;
   preview.time_s = {0};
   preview.num_values = 3;

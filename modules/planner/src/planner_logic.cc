@@ -33,6 +33,19 @@ void PlannerLogic::on_stack(const stack_t& msg) {
   while (stacks_.size() > std::max<size_t>(config_.remembered_stacks, 1)) stacks_.pop_front();
 }
 
+// The message's code for how a block ends (the simulation's enum is the planner's own; the message's
+// values are fixed by the schema).
+int8_t end_state(BlockEnd end) {
+  switch (end) {
+    case BlockEnd::kUntouched: return collapse_preview_t::END_UNTOUCHED;
+    case BlockEnd::kAtRest: return collapse_preview_t::END_AT_REST;
+    case BlockEnd::kSlidAway: return collapse_preview_t::END_SLID_AWAY;
+    case BlockEnd::kFellOff: return collapse_preview_t::END_FELL_OFF;
+    case BlockEnd::kMoving: return collapse_preview_t::END_STILL_MOVING;
+  }
+  return collapse_preview_t::END_STILL_MOVING;
+}
+
 collapse_preview_t to_message(const CollapsePreview& preview, const core::Stack& stack, int64_t utime,
                               int64_t frame_number) {
   collapse_preview_t msg{};
@@ -40,6 +53,8 @@ collapse_preview_t to_message(const CollapsePreview& preview, const core::Stack&
   msg.frame_number = frame_number;
   msg.num_blocks = static_cast<int32_t>(stack.blocks.size());
   for (const core::Block& b : stack.blocks) msg.block_ids.push_back(b.id);
+  for (size_t i = 0; i < stack.blocks.size(); ++i)
+    msg.end_state.push_back(i < preview.end.size() ? end_state(preview.end[i]) : collapse_preview_t::END_STILL_MOVING);
   msg.num_frames = static_cast<int32_t>(preview.times.size());
   const double seconds = seconds_per_time_unit();  // real blocks: 7.5 cm
   for (double t : preview.times) msg.time_s.push_back(t * seconds);
