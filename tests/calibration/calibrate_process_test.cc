@@ -30,10 +30,11 @@
 #include "bricklayer/calibration_t.hpp"
 #include "bricklayer/command_t.hpp"
 #include "bricklayer/common/channels.h"
-#include "bricklayer/common/module.h"
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/image_t.hpp"
 #include "bricklayer/projector_state_t.hpp"
+#include "bricklayer/runtime/codec.h"
+#include "bricklayer/runtime/lcm_bus.h"
 #include "bricklayer/stack_t.hpp"
 #include "bricklayer/simcam/render.h"
 
@@ -119,17 +120,17 @@ class FakeRig {
   // what a real bricklayer-projection reports on BL_PROJECTOR instead (closed loop, as simcam does).
   FakeRig(const sim::CameraSetup& camera, const sim::ProjectorSetup& projector, bool answer_projector = true,
           bool follow_projector = false)
-      : module_("fakerig", kUrl), renderer_(camera, projector), answer_projector_(answer_projector) {
+      : bus_(kUrl), renderer_(camera, projector), answer_projector_(answer_projector) {
     if (follow_projector) {
       answer_projector_ = false;
-      module_.subscribe<projector_state_t>(channel(kProjectorChannel), [this](const projector_state_t& s) { on_projector(s); });
+      subscribe<projector_state_t>(channel(kProjectorChannel), [this](const projector_state_t& s) { on_projector(s); });
     }
     nuisance_ = sim::Nuisance::level(1);
     nuisance_.layout_seed = 11;
     nuisance_.jpeg_quality = 0;  // the bus encoding below is the JPEG round trip
-    module_.subscribe<command_t>(channel(kCommandChannel), [this](const command_t& c) { on_command(c); });
-    module_.subscribe<calibration_t>(channel(kCalibrationChannel), [this](const calibration_t& c) { published = c; });
-    module_.subscribe<heartbeat_t>(channel(kHeartbeatChannel), [this](const heartbeat_t& h) {
+    subscribe<command_t>(channel(kCommandChannel), [this](const command_t& c) { on_command(c); });
+    subscribe<calibration_t>(channel(kCalibrationChannel), [this](const calibration_t& c) { published = c; });
+    subscribe<heartbeat_t>(channel(kHeartbeatChannel), [this](const heartbeat_t& h) {
       if (h.module == "calibrate") last_heartbeat = h;
     });
     render_frame();
@@ -142,7 +143,7 @@ class FakeRig {
     while (true) {
       int status = 0;
       if (waitpid(child.pid, &status, WNOHANG) == child.pid) {
-        for (int i = 0; i < 10; ++i) module_.lcm().handleTimeout(10);  // the last messages
+        for (int i = 0; i < 10; ++i) bus_.handle(10);  // the last messages
         return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
       }
       const auto now = std::chrono::steady_clock::now();
@@ -155,7 +156,7 @@ class FakeRig {
         publish_frame();
         next_frame = now + std::chrono::milliseconds(33);
       }
-      module_.lcm().handleTimeout(5);
+      bus_.handle(5);
     }
   }
 
@@ -170,7 +171,7 @@ class FakeRig {
         publish_frame();
         next_frame = now + std::chrono::milliseconds(33);
       }
-      module_.lcm().handleTimeout(5);
+      bus_.handle(5);
     }
     return true;
   }
@@ -183,7 +184,7 @@ class FakeRig {
     s.num_blocks = blocks;
     s.blocks.resize(blocks);
     for (int i = 0; i < blocks; ++i) s.blocks[i].id = i;
-    module_.publish(channel(kStackChannel), s);
+    publish(channel(kStackChannel), s);
   }
 
   void send_self_check() {
@@ -191,7 +192,7 @@ class FakeRig {
     c.command = command_t::SELF_CHECK;
     c.sequence = 1;
     c.argument = "";
-    module_.publish(channel(kCommandChannel), c);
+    publish(channel(kCommandChannel), c);
   }
 
   std::optional<double> heartbeat_value(const std::string& name) const {
@@ -242,12 +243,12 @@ class FakeRig {
     render_frame();
     if (!answer_projector_) return;
     projector_state_t s{};
-    s.utime = wall_utime();
+    s.utime = bus_.now_utime();
     s.frame_number = -1;
     s.command_sequence = c.sequence;
     s.mode = projector_state_t::MODE_PATTERN;
     s.image.source = "fakerig";
-    module_.publish(channel(kProjectorChannel), s);
+    publish(channel(kProjectorChannel), s);
   }
 
   void render_frame() {
@@ -259,7 +260,7 @@ class FakeRig {
 
   void publish_frame() {
     image_t img{};
-    img.utime = wall_utime();
+    img.utime = bus_.now_utime();
     img.frame_number = frame_number_++;
     img.width = size_.width;
     img.height = size_.height;
@@ -270,10 +271,23 @@ class FakeRig {
       img.data.assign(img.data.size() / 2, 0x5A);  // not a JPEG
     }
     img.size = static_cast<int32_t>(img.data.size());
-    module_.publish(channel(kImageChannel), img);
+    publish(channel(kImageChannel), img);
   }
 
-  Module module_;
+  // Every message of type T on the channel, decoded (a message that does not decode is skipped).
+  template <typename T>
+  void subscribe(const std::string& name, std::function<void(const T&)> handler) {
+    bus_.subscribe(name, runtime::QueuePolicy::keep(1000), [handler = std::move(handler)](const runtime::Received& r) {
+      if (const std::optional<T> m = runtime::decode<T>(r.data, r.size)) handler(*m);
+    });
+  }
+  template <typename T>
+  void publish(const std::string& name, const T& msg) {
+    const std::vector<uint8_t> bytes = runtime::encode(msg);
+    bus_.publish(name, bytes.data(), bytes.size());
+  }
+
+  runtime::LcmBus bus_;
   sim::Renderer renderer_;
   bool answer_projector_;
   sim::Nuisance nuisance_;
@@ -612,7 +626,7 @@ TEST_CASE("bricklayer-calibrate refuses bad flags and a bad calibration file") {
   };
   const std::vector<Case> cases = {
       {{"--projector-size", "huge"}, 2, "--projector-size"},
-      {{"--max-error-px", "-1"}, 2, "--max-error-px must be positive"},
+      {{"--max-error-px", "-1"}, 2, "--max-error-px must be > 0"},
       {{"--self-check", "--output", bad}, 1, "missing key"},
       {{"--self-check", "--output", temp("absent.json")}, 1, "cannot open"},
       {{"--board", temp("absent-board.json")}, 1, "absent-board.json"},

@@ -1,0 +1,303 @@
+// CalibrateNode on the in-process rig with the real SimcamNode (a random camera and projector setup,
+// the projector's light drawn into its frames) and the real ProjectionNode (SDL's offscreen driver)
+// answering its pattern commands: the closed loop of the exhibit, on a clock that moves only when the
+// test steps it. A full calibration completes within the documented bounds (--max-error-px and
+// --max-point-error-px, and within 1.5 projector px of simcam's true mapping); the self-check on the
+// empty board passes unmoved and reports drift for a moved camera; without a projector the run fails
+// after exactly twice --timeout of bus time with a counted error naming what is missing; and the same
+// run twice writes the same file byte for byte.
+#include <catch2/catch.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include "bricklayer/board/calibration_file.h"
+#include "bricklayer/board/mapping.h"
+#include "bricklayer/calibration/calibrate_node.h"
+#include "bricklayer/calibration_t.hpp"
+#include "bricklayer/command_t.hpp"
+#include "bricklayer/common/channels.h"
+#include "bricklayer/projection/projection_node.h"
+#include "bricklayer/simcam/render.h"
+#include "bricklayer/simcam/simcam_node.h"
+#include "bricklayer/stack_t.hpp"
+#include "harness/rig.h"
+#include "harness/scratch.h"
+
+using namespace bricklayer;
+using namespace std::chrono_literals;
+using calibration::CalibrateConfig;
+using calibration::CalibrateNode;
+
+namespace {
+
+constexpr int64_t kStepUs = 2'000;  // the rig's step: frames at 30 Hz land within 2 ms of their time
+constexpr uint64_t kSetupSeed = 4;  // simcam's random camera + projector setup (the process test's)
+
+const std::string kCommands = channel(kCommandChannel);
+const std::string kCalibrations = channel(kCalibrationChannel);
+const std::string kHeartbeats = channel(kHeartbeatChannel);
+
+// An empty board for ten minutes, mild nuisance (blur, noise, shadow, JPEG).
+std::string empty_scenario(const harness::ScratchDir& dir) {
+  const std::string path = dir / "empty.json";
+  harness::write_file(path, nlohmann::json{{"description", "an empty board"},
+                                           {"nuisance", "mild"},
+                                           {"seed", 7},
+                                           {"duration_s", 600},
+                                           {"keyframes", nlohmann::json::array({{{"t", 0}, {"blocks", nlohmann::json::array()}}})}}
+                                .dump());
+  return path;
+}
+
+simcam::SimcamConfig camera_config(const std::string& scenario, int64_t setup_seed) {
+  simcam::SimcamConfig c;
+  c.scenario = scenario;
+  c.setup_seed = setup_seed;
+  return c;
+}
+
+projection::ProjectionConfig projector_config() {
+  projection::ProjectionConfig c;
+  c.headless = true;
+  c.mute = true;
+  return c;
+}
+
+CalibrateConfig calibrate_config(const std::string& output) {
+  CalibrateConfig c;
+  c.output = output;
+  c.timeout = 2;
+  return c;
+}
+
+// The largest distance (projector px) between the calibration's camera -> projector mapping and
+// simcam's true one, over a 20 px grid of the rectified frame.
+double max_mapping_error(const calibration_t& c, uint64_t seed) {
+  const simcam::CameraSetup camera = simcam::CameraSetup::random(seed);
+  const simcam::ProjectorSetup projector = simcam::ProjectorSetup::random(seed);
+  double worst = 0;
+  for (double y = 10; y <= 470; y += 20) {
+    for (double x = 10; x <= 630; x += 20) {
+      const cv::Point2d p = simcam::rectified_to_camera(camera, {x, y});
+      if (p.x < 2 || p.y < 2 || p.x > camera.size.width - 3 || p.y > camera.size.height - 3) continue;
+      worst = std::max(worst, cv::norm(board::camera_to_projector(c, p) - simcam::camera_to_projector(camera, projector, p)));
+    }
+  }
+  return worst;
+}
+
+struct Run {
+  int exit_code = -1;
+  bool finished = false;
+  int64_t bus_us = 0;  // bus time from start to finish
+  std::string file;    // what the node wrote to --output ("" when nothing)
+  std::vector<calibration_t> published;
+  std::vector<command_t> commands;
+  int64_t errors = 0;
+  std::string status;
+};
+
+// The whole exhibit loop on a rig: simcam, projection (unless without_projector) and calibrate.
+Run run_calibrate(const CalibrateConfig& config, const std::string& scenario, int64_t setup_seed,
+                  bool with_projector = true, std::chrono::microseconds max = 120s) {
+  harness::Rig rig(kStepUs);
+  rig.add<simcam::SimcamNode>(camera_config(scenario, setup_seed));
+  if (with_projector) rig.add<projection::ProjectionNode>(projector_config());
+  auto& rec = rig.record({kCommands, kCalibrations});
+  const int64_t start = rig.now();
+  auto& node = rig.add<CalibrateNode>(config);
+  Run r;
+  r.finished = rig.run_until([&] { return node.finished(); }, max);
+  rig.settle();
+  r.exit_code = node.exit_code();
+  r.bus_us = rig.now() - start;
+  if (std::filesystem::exists(config.output)) r.file = harness::read_file(config.output);
+  r.published = rec.all<calibration_t>(kCalibrations);
+  r.commands = rec.all<command_t>(kCommands);
+  r.errors = node.counters().errors;
+  r.status = node.status();
+  return r;
+}
+
+// One calibration for the test cases that need a calibrated setup (made once: a run is seconds).
+const std::string& calibrated_file() {
+  static harness::ScratchDir dir("calibrate-node-shared");
+  static const std::string path = [] {
+    const std::string out = dir / "calibration.json";
+    const Run r = run_calibrate(calibrate_config(out), empty_scenario(dir), kSetupSeed);
+    REQUIRE(r.exit_code == 0);
+    return out;
+  }();
+  return path;
+}
+
+}  // namespace
+
+TEST_CASE("the calibrate node calibrates through the real projection and simcam nodes within the documented bounds") {
+  harness::ScratchDir dir("calibrate-node");
+  const CalibrateConfig config = calibrate_config(dir / "calibration.json");
+  const Run r = run_calibrate(config, empty_scenario(dir), kSetupSeed);
+  INFO("status " << r.status << ", " << r.bus_us / 1000 << " ms of bus time");
+  REQUIRE(r.finished);
+  CHECK(r.exit_code == 0);
+  CHECK(r.status == "ok");
+  CHECK(r.errors == 0);
+  // Six patterns, each once (no step timed out), then the projector back to the game.
+  int shown = 0;
+  for (const command_t& c : r.commands) shown += c.command == command_t::SHOW_PATTERN;
+  CHECK(shown == 6);
+  REQUIRE_FALSE(r.commands.empty());
+  CHECK(r.commands.back().command == command_t::CLEAR_PATTERN);
+  // Sequences: the bus clock at the first command, then counting.
+  for (size_t i = 1; i < r.commands.size() && r.commands[i].command == command_t::SHOW_PATTERN; ++i)
+    CHECK(r.commands[i].sequence == r.commands[i - 1].sequence + 1);
+
+  REQUIRE_FALSE(r.file.empty());
+  const calibration_t saved = board::load_calibration(config.output);
+  INFO("reprojection error mean " << saved.reprojection_error_mean_px << " px, max " << saved.reprojection_error_max_px);
+  CHECK(saved.reprojection_error_mean_px <= config.max_error_px);
+  CHECK(saved.reprojection_error_max_px <= config.max_point_error_px);
+  const double worst = max_mapping_error(saved, kSetupSeed);
+  INFO("max mapping error against simcam's truth " << worst << " projector px");
+  CHECK(worst < 1.5);
+  // Published once, the same calibration as saved, stamped with the bus clock.
+  REQUIRE(r.published.size() == 1);
+  CHECK(r.published.front().utime == saved.utime);
+  CHECK(saved.utime >= runtime::InProcessBus::kDefaultStartUtime);
+  CHECK(saved.utime <= runtime::InProcessBus::kDefaultStartUtime + r.bus_us);
+}
+
+TEST_CASE("the same calibration run twice writes the same file byte for byte") {
+  harness::ScratchDir a("calibrate-node-a"), b("calibrate-node-b");
+  const Run first = run_calibrate(calibrate_config(a / "calibration.json"), empty_scenario(a), kSetupSeed);
+  const Run second = run_calibrate(calibrate_config(b / "calibration.json"), empty_scenario(b), kSetupSeed);
+  REQUIRE(first.exit_code == 0);
+  REQUIRE(second.exit_code == 0);
+  CHECK(first.bus_us == second.bus_us);
+  CHECK(first.file == second.file);
+  REQUIRE(first.published.size() == 1);
+  REQUIRE(second.published.size() == 1);
+  CHECK(runtime::encode(first.published.front()) == runtime::encode(second.published.front()));
+}
+
+TEST_CASE("the calibrate node's self-check on the empty board passes unmoved and reports a moved camera") {
+  harness::ScratchDir dir("calibrate-node-check");
+  const std::string scenario = empty_scenario(dir);
+  CalibrateConfig config = calibrate_config(calibrated_file());
+  config.self_check = true;
+  const std::string before = harness::read_file(config.output);
+  {
+    harness::Rig rig(kStepUs);
+    rig.add<simcam::SimcamNode>(camera_config(scenario, kSetupSeed));
+    rig.add<projection::ProjectionNode>(projector_config());
+    auto& node = rig.add<CalibrateNode>(config);
+    REQUIRE(rig.run_until([&] { return node.finished(); }, 30s));
+    INFO(node.status());
+    CHECK(node.exit_code() == 0);
+    CHECK(node.status() == "ok");
+    const heartbeat_t hb = node.heartbeat();
+    const std::optional<double> drift = harness::heartbeat_value(hb, "drift_px");
+    REQUIRE(drift);
+    INFO("drift " << *drift << " px");
+    CHECK(*drift < 1.0);
+  }
+  {
+    // Camera and projector mounted otherwise (simcam's setup 5): the check markers are seen far from
+    // where the calibration expects them (exit 3).
+    harness::Rig rig(kStepUs);
+    simcam::SimcamConfig moved = camera_config(scenario, kSetupSeed);
+    moved.setup_seed = 5;
+    rig.add<simcam::SimcamNode>(moved);
+    rig.add<projection::ProjectionNode>(projector_config());
+    auto& node = rig.add<CalibrateNode>(config);
+    REQUIRE(rig.run_until([&] { return node.finished(); }, 30s));
+    INFO(node.status());
+    CHECK(node.exit_code() == CalibrateNode::kExitDrift);
+    CHECK(node.status() == "drift above threshold: recalibrate");
+    const std::optional<double> drift = harness::heartbeat_value(node.heartbeat(), "drift_px");
+    REQUIRE(drift);
+    INFO("drift " << *drift << " px");  // measured 64 px
+    CHECK(*drift > config.drift_threshold);
+  }
+  CHECK(harness::read_file(config.output) == before);  // a self-check never writes
+}
+
+TEST_CASE("the calibrate node serves its file and self-checks on command only while the board is empty") {
+  harness::ScratchDir dir("calibrate-node-serve");
+  CalibrateConfig config = calibrate_config(calibrated_file());
+  config.serve = true;
+  config.republish = 1;
+  harness::Rig rig(kStepUs);
+  rig.add<simcam::SimcamNode>(camera_config(empty_scenario(dir), kSetupSeed));
+  rig.add<projection::ProjectionNode>(projector_config());
+  auto& rec = rig.record({kCommands, kCalibrations});
+  auto& node = rig.add<CalibrateNode>(config);
+  // Published at once and every --republish second by the bus clock.
+  rig.run_for(3500ms);
+  CHECK(rec.count(kCalibrations) == 4);
+
+  command_t check{};
+  check.command = command_t::SELF_CHECK;
+  check.sequence = 1;
+  bricklayer::stack_t busy{};
+  busy.status = bricklayer::stack_t::STATUS_OK;
+  busy.num_blocks = 1;
+  busy.blocks.resize(1);
+  rig.publish(channel(kStackChannel), busy);
+  rig.publish(kCommands, check);
+  rig.run_for(1s);
+  CHECK(node.status() == "self-check needs an empty board");
+  auto shown = [&] {
+    int n = 0;
+    for (const command_t& c : rec.all<command_t>(kCommands)) n += c.command == command_t::SHOW_PATTERN;
+    return n;
+  };
+  CHECK(shown() == 0);
+
+  bricklayer::stack_t empty = busy;
+  empty.num_blocks = 0;
+  empty.blocks.clear();
+  rig.publish(channel(kStackChannel), empty);
+  rig.publish(kCommands, check);
+  REQUIRE(rig.run_until([&] { return harness::heartbeat_value(node.heartbeat(), "drift_px").has_value(); }, 10s));
+  CHECK(shown() == 1);
+  CHECK(*harness::heartbeat_value(node.heartbeat(), "drift_px") < 1.0);
+  CHECK(node.status() == "ok");
+  CHECK_FALSE(node.finished());  // --serve never finishes by itself
+}
+
+TEST_CASE("without a projector the calibrate node fails after twice --timeout of bus time with a counted error") {
+  harness::ScratchDir dir("calibrate-node-noprojector");
+  CalibrateConfig config = calibrate_config(dir / "never.json");
+  config.timeout = 0.5;
+  const Run r = run_calibrate(config, empty_scenario(dir), kSetupSeed, /*with_projector=*/false, 10s);
+  INFO("status " << r.status);
+  REQUIRE(r.finished);
+  CHECK(r.exit_code == CalibrateNode::kExitRejected);
+  CHECK(r.errors == 1);
+  CHECK(r.status.find("the projector did not confirm step 1") != std::string::npos);
+  CHECK(r.status.find("within 1 s): is bricklayer-projection running?") != std::string::npos);
+  // Sent, sent again after --timeout, given up after another --timeout: 1 s of bus time (the rig's
+  // clock moves in 2 ms steps).
+  CHECK(r.bus_us >= 1'000'000);
+  CHECK(r.bus_us <= 1'000'000 + 2 * kStepUs);
+  REQUIRE(r.commands.size() == 3);
+  CHECK(r.commands[0].command == command_t::SHOW_PATTERN);
+  CHECK(r.commands[1].command == command_t::SHOW_PATTERN);
+  CHECK(r.commands[1].sequence == r.commands[0].sequence + 1);
+  CHECK(r.commands[2].command == command_t::CLEAR_PATTERN);
+  CHECK(r.file.empty());
+}
+
+TEST_CASE("the calibrate node refuses a bad configuration built in code") {
+  harness::Rig rig;
+  CalibrateConfig c;
+  c.projector_size = "huge";
+  CHECK_THROWS_WITH(rig.add<CalibrateNode>(c), Catch::Contains("projector-size"));
+  c = CalibrateConfig{};
+  c.serve = c.self_check = true;
+  CHECK_THROWS_WITH(rig.add<CalibrateNode>(c), Catch::Contains("exclude each other"));
+  c = CalibrateConfig{};
+  c.timeout = 0;
+  CHECK_THROWS_AS(rig.add<CalibrateNode>(c), std::invalid_argument);
+}
