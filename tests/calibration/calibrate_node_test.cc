@@ -4,8 +4,9 @@
 // test steps it. A full calibration completes within the documented bounds (--max-error-px and
 // --max-point-error-px, and within 1.5 projector px of simcam's true mapping); the self-check on the
 // empty board passes unmoved and reports drift for a moved camera; without a projector the run fails
-// after exactly twice --timeout of bus time with a counted error naming what is missing; and the same
-// run twice writes the same file byte for byte.
+// after exactly twice --timeout of bus time with a counted error naming what is missing; the same
+// run twice writes the same file byte for byte, and so does the node alone replaying the recorded
+// run on the log bus (twice, and the same as the live run).
 #include <catch2/catch.hpp>
 
 #include <nlohmann/json.hpp>
@@ -17,6 +18,8 @@
 #include "bricklayer/command_t.hpp"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/projection/projection_node.h"
+#include "bricklayer/runtime/log_bus.h"
+#include "bricklayer/runtime/log_file.h"
 #include "bricklayer/simcam/render.h"
 #include "bricklayer/simcam/simcam_node.h"
 #include "bricklayer/stack_t.hpp"
@@ -97,10 +100,17 @@ struct Run {
   std::string status;
 };
 
-// The whole exhibit loop on a rig: simcam, projection (unless without_projector) and calibrate.
+// The whole exhibit loop on a rig: simcam, projection (unless without_projector) and calibrate;
+// everything published is written to log_path when one is given.
 Run run_calibrate(const CalibrateConfig& config, const std::string& scenario, int64_t setup_seed,
-                  bool with_projector = true, std::chrono::microseconds max = 120s) {
+                  bool with_projector = true, std::chrono::microseconds max = 120s, const std::string& log_path = "") {
   harness::Rig rig(kStepUs);
+  std::unique_ptr<runtime::LogWriter> log;
+  if (!log_path.empty()) {
+    log = std::make_unique<runtime::LogWriter>(log_path);
+    rig.hub().set_tap([&log](const std::string&, const std::string& channel, const uint8_t* data, size_t size,
+                             int64_t utime) { REQUIRE(log->write(utime, channel, data, size)); });
+  }
   rig.add<simcam::SimcamNode>(camera_config(scenario, setup_seed));
   if (with_projector) rig.add<projection::ProjectionNode>(projector_config());
   auto& rec = rig.record({kCommands, kCalibrations});
@@ -114,6 +124,29 @@ Run run_calibrate(const CalibrateConfig& config, const std::string& scenario, in
   if (std::filesystem::exists(config.output)) r.file = harness::read_file(config.output);
   r.published = rec.all<calibration_t>(kCalibrations);
   r.commands = rec.all<command_t>(kCommands);
+  r.errors = node.counters().errors;
+  r.status = node.status();
+  return r;
+}
+
+// CalibrateNode alone on a recorded log (the log bus: its clock is the events' times), as bricklayer-replay
+// runs a module: to its finish or the log's end.
+Run replay_calibrate(const CalibrateConfig& config, const std::string& log_path) {
+  Run r;
+  runtime::LogBus bus(log_path, {}, [&r](const std::string& channel, const uint8_t* data, size_t size, int64_t) {
+    if (channel == kCalibrations)
+      if (auto c = runtime::decode<calibration_t>(data, size)) r.published.push_back(*c);
+    if (channel == kCommands)
+      if (auto c = runtime::decode<command_t>(data, size)) r.commands.push_back(*c);
+  });
+  const int64_t start = bus.now_utime();
+  CalibrateNode node(config, bus);
+  while (!node.finished() && node.step(20)) {
+  }
+  r.finished = node.finished();
+  r.exit_code = node.exit_code();
+  r.bus_us = bus.now_utime() - start;
+  if (std::filesystem::exists(config.output)) r.file = harness::read_file(config.output);
   r.errors = node.counters().errors;
   r.status = node.status();
   return r;
@@ -178,6 +211,28 @@ TEST_CASE("the same calibration run twice writes the same file byte for byte") {
   REQUIRE(first.published.size() == 1);
   REQUIRE(second.published.size() == 1);
   CHECK(runtime::encode(first.published.front()) == runtime::encode(second.published.front()));
+}
+
+TEST_CASE("a recorded calibration replayed on the log bus writes the live run's file byte for byte, every time") {
+  harness::ScratchDir dir("calibrate-node-log");
+  const std::string log = dir / "calibration.lcmlog";
+  const Run live = run_calibrate(calibrate_config(dir / "live.json"), empty_scenario(dir), kSetupSeed, true, 120s, log);
+  REQUIRE(live.exit_code == 0);
+  const Run first = replay_calibrate(calibrate_config(dir / "replay-1.json"), log);
+  const Run second = replay_calibrate(calibrate_config(dir / "replay-2.json"), log);
+  INFO("replay status " << first.status);
+  REQUIRE(first.finished);
+  CHECK(first.exit_code == 0);
+  CHECK(first.errors == 0);
+  CHECK(first.file == second.file);
+  CHECK(first.file == live.file);
+  // The same commands (sequences from the recorded clock, so the recorded echoes match them).
+  REQUIRE(first.commands.size() == live.commands.size());
+  for (size_t i = 0; i < live.commands.size(); ++i) CHECK(runtime::encode(first.commands[i]) == runtime::encode(live.commands[i]));
+  REQUIRE(first.published.size() == 1);
+  REQUIRE(second.published.size() == 1);
+  CHECK(runtime::encode(first.published.front()) == runtime::encode(live.published.front()));
+  CHECK(runtime::encode(second.published.front()) == runtime::encode(live.published.front()));
 }
 
 TEST_CASE("the calibrate node's self-check on the empty board passes unmoved and reports a moved camera") {
