@@ -16,6 +16,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <functional>
@@ -596,6 +597,35 @@ TEST_CASE("bricklayer-calibrate --serve waits for a calibration file that is not
   REQUIRE(served);
   CHECK(rig.published->utime == 4242);
   CHECK(log.find("SELF_CHECK ignored: no calibration") != std::string::npos);
+  CHECK(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+  std::remove(output.c_str());
+}
+
+TEST_CASE("bricklayer-calibrate --serve waits out a bus that cannot be opened, then serves once the route is back") {
+  // No multicast route yet (the exhibit's machine booting, a switch power-cycled): the process must not
+  // exit (the launcher would restart it in a loop) but wait, and serve once the bus can be opened.
+  const std::string output = temp("noroute.json");
+  calibration_t written = board::default_calibration();
+  written.utime = 777;
+  board::save_calibration(output, written);
+  REQUIRE(std::system("ip route del 224.0.0.0/4 dev lo") == 0);
+  const Child child = spawn({program(), "--lcm-url", kUrl, "--output", output, "--serve", "--republish", "0.3"},
+                            temp("noroute.err"));
+  const ReapOnExit reap_child{child};
+  usleep(1500 * 1000);  // a few bus reopen attempts (once a second)
+  int status = 0;
+  const bool running = waitpid(child.pid, &status, WNOHANG) == 0;
+  REQUIRE(std::system("ip route add 224.0.0.0/4 dev lo") == 0);
+  CHECK(running);
+  FakeRig rig(sim::CameraSetup{}, sim::ProjectorSetup{});
+  const bool served = rig.run_until([&] { return rig.published.has_value(); }, 10);
+  status = stop_child(child);
+  const std::string log = slurp(child.stderr_path);
+  INFO(log);
+  CHECK(log.find("cannot open the LCM bus") != std::string::npos);
+  REQUIRE(served);
+  CHECK(rig.published->utime == 777);
   CHECK(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 0);
   std::remove(output.c_str());
