@@ -74,33 +74,3 @@ TEST_CASE("the heartbeat carries counters and module values") {
   CHECK(got.value_names[0] == "drift_px");
   CHECK(got.values[0] == 0.25);
 }
-
-TEST_CASE("Latest keeps only the newest input and counts what it replaced") {
-  Counters c;
-  Latest<int> slot(c);
-  slot.put(1);
-  slot.put(2);
-  slot.put(3);
-  auto v = slot.take();
-  REQUIRE(v);
-  CHECK(*v == 3);
-  CHECK(c.dropped == 2);
-  CHECK_FALSE(slot.take());
-}
-
-TEST_CASE("same_message compares what two messages encode to") {
-  bricklayer::stack_t a{};
-  a.block_length = 1;
-  a.block_height = 0.25;
-  a.num_blocks = 1;
-  a.blocks.resize(1);
-  a.blocks[0].x = -0.5;
-  bricklayer::stack_t b = a;
-  CHECK(same_message(a, b));
-  b.blocks[0].x = -0.4999;
-  CHECK_FALSE(same_message(a, b));
-  b = a;
-  b.num_blocks = 2;  // a different size
-  b.blocks.resize(2);
-  CHECK_FALSE(same_message(a, b));
-}

@@ -1,7 +1,8 @@
-// The skeleton every Bricklayer process shares: it owns the LCM handle, decodes inputs defensively
-// (malformed, wrong-fingerprint and oversized messages are counted errors, never crashes), keeps only
-// the newest input when the process falls behind (counted drops), publishes a heartbeat with its
-// counters once a second, and stops cleanly on SIGINT/SIGTERM.
+// The older process skeleton: it owns the LCM handle, decodes inputs defensively (malformed,
+// wrong-fingerprint and oversized messages are counted errors, never crashes), publishes a heartbeat
+// with its counters once a second, and stops cleanly on SIGINT/SIGTERM. No module runs on it any more
+// (every stage is a node on the runtime, modules/runtime); process tests still use it to play a peer
+// on the live bus. New code uses runtime::LcmBus and tests/harness instead.
 //
 // LCM 1.3.1 has no lambda subscribe and must be pumped from one thread (shared NOTES), so handlers
 // are std::functions behind a static trampoline, and run() pumps with handleTimeout on the calling
@@ -31,37 +32,6 @@ struct Counters {
   std::atomic<int64_t> dropped{0};
   std::atomic<int64_t> errors{0};
 };
-
-// Newest-input-wins slot: put() replaces an unprocessed value and counts it as dropped.
-template <typename T>
-class Latest {
- public:
-  explicit Latest(Counters& counters) : counters_(counters) {}
-  void put(T value) {
-    if (value_) ++counters_.dropped;
-    value_ = std::move(value);
-  }
-  std::optional<T> take() {
-    std::optional<T> out = std::move(value_);
-    value_.reset();
-    return out;
-  }
-  bool empty() const { return !value_.has_value(); }
-
- private:
-  Counters& counters_;
-  std::optional<T> value_;
-};
-
-// Whether two LCM messages encode to the same bytes (e.g. a calibration republished unchanged, which a
-// module keeps using as it is instead of rebuilding its state).
-template <typename M>
-bool same_message(const M& a, const M& b) {
-  const int size = a.getEncodedSize();
-  if (size != b.getEncodedSize()) return false;
-  std::vector<uint8_t> ea(static_cast<size_t>(size)), eb(static_cast<size_t>(size));
-  return a.encode(ea.data(), 0, size) == size && b.encode(eb.data(), 0, size) == size && ea == eb;
-}
 
 // Microseconds since the epoch. For stamps and timing fields only, never inside a computation.
 int64_t wall_utime();
