@@ -10,6 +10,7 @@
 #include <regex>
 #include <sstream>
 
+#include "bricklayer/command_t.hpp"
 #include "bricklayer/host_state_t.hpp"
 #include "bricklayer/launcher/supervisor.h"
 
@@ -121,6 +122,51 @@ TEST_CASE("a hung module (heartbeat stops) is killed and restarted") {
   INFO(out);
   CHECK(out.find("prediction silent for 1.5 s: killing it") != std::string::npos);
   CHECK(out.find("died: killed by signal 9") != std::string::npos);
+}
+
+TEST_CASE("the operator's restart (RESTART_MODULE HOST/NAME) stops a module and starts it again, whatever its policy") {
+  TempDir dir("operator-restart");
+  // on-failure: a module that ends cleanly on SIGTERM would stay down; the operator's restart does not.
+  auto profile = dir.write("p.json", R"({"modules":[
+      {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"],"restart":"on-failure"}]})");
+  auto launcher = launch(dir, profile, {"--host-name", "camera-host"});
+  test::Listener bus;
+  REQUIRE(bus.ok());
+  bus.listen(channel(kHeartbeatChannel));
+  heartbeat_t hb{};
+  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", hb); }, 10s));
+  const pid_t first = hb.pid;
+  auto send = [&](const std::string& argument) {
+    command_t c{};
+    c.command = command_t::RESTART_MODULE;
+    c.argument = argument;
+    c.sequence = -1;
+    REQUIRE(bus.lcm().publish(channel(kCommandChannel), &c) == 0);
+  };
+  // Another host's module and a module this host does not run: nothing restarts.
+  send("projector-host/prediction");
+  send("camera-host/no-such-module");
+  bus.pump(1500ms);
+  REQUIRE(bus.last_heartbeat("prediction", hb));
+  CHECK(hb.pid == first);
+
+  send("camera-host/prediction");
+  heartbeat_t back{};
+  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", back) && back.pid != first; }, 10s));
+  CHECK(back.restarts == 1);
+  CHECK(::kill(first, 0) != 0);
+  heartbeat_t own{};
+  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("launcher", own); }, 3s));
+  double unknown = -1;
+  for (int i = 0; i < own.num_values; ++i)
+    if (own.value_names[i] == "restart_requests_unknown") unknown = own.values[i];
+  CHECK(unknown == 1);
+  launcher.signal(SIGTERM);
+  REQUIRE(launcher.wait_for(15s));
+  const std::string out = dir.read("launch.out");
+  INFO(out);
+  CHECK(out.find("restarting prediction (pid " + std::to_string(first) + ") as the operator asked") != std::string::npos);
+  CHECK(out.find("restart asked for a module this host does not run: \"no-such-module\" (counted)") != std::string::npos);
 }
 
 TEST_CASE("launch/bricklayer runs a profile with the build's binaries and stops after --duration") {

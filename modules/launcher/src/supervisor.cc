@@ -102,6 +102,9 @@ class Supervisor::SupervisorNode final : public runtime::Node {
                            [this](const heartbeat_t& hb) { owner_.HandleHeartbeat(hb); });
     subscribe<host_state_t>(channel(kHostStateChannel), runtime::QueuePolicy::keep(256),
                             [this](const host_state_t& hs) { owner_.HandleHostState(hs); });
+    // Operator commands (the status page's "restart"); every one counts, so a queue.
+    subscribe<command_t>(channel(kCommandChannel), runtime::QueuePolicy::keep(64),
+                         [this](const command_t& c) { owner_.HandleCommand(c); });
     set_tick_ms(20);
   }
   using Node::publish_report;
@@ -214,6 +217,36 @@ void Supervisor::HandleHeartbeat(const heartbeat_t& hb) {
   }
 }
 
+void Supervisor::HandleCommand(const command_t& c) {
+  if (c.command != command_t::RESTART_MODULE) return;
+  const auto slash = c.argument.find('/');
+  const std::string host = slash == std::string::npos ? "" : c.argument.substr(0, slash);
+  const std::string name = slash == std::string::npos ? c.argument : c.argument.substr(slash + 1);
+  if (host != host_label_) return;  // another machine's launcher answers it
+  for (auto& m : managed_) {
+    if (m.spec.name != name) continue;
+    if (m.state == State::kWaitingRestart || m.state == State::kFailed || m.state == State::kExited) {
+      // Not running (in its backoff, or given up by its policy): the operator's word starts it now.
+      say("starting " + name + " now, as the operator asked");
+      m.state = State::kWaitingRestart;
+      m.restart_at = Clock::now();
+      return;
+    }
+    if (m.state != State::kStarting && m.state != State::kUp) {
+      say("restart of " + name + " asked for before it was first started: it starts in its turn");
+      return;
+    }
+    // SIGTERM, so the module stops cleanly (a logger closes its file); the reap restarts it whatever its
+    // restart policy, at once and without counting a quick failure.
+    say("restarting " + name + " (pid " + std::to_string(m.proc.pid()) + ") as the operator asked");
+    m.restart_requested = true;
+    m.proc.signal(SIGTERM);
+    return;
+  }
+  ++unknown_commands_;
+  say("restart asked for a module this host does not run: \"" + name + "\" (counted)");
+}
+
 void Supervisor::HandleHostState(const host_state_t& hs) {
   if (hs.host == host_label_ && hs.launcher_pid == static_cast<int32_t>(::getpid())) return;  // our own
   const bool stopped = hs.num_modules > 0 && std::all_of(hs.modules.begin(), hs.modules.end(), [](const module_state_t& m) {
@@ -252,12 +285,22 @@ void Supervisor::ended(Managed& m, Clock::time_point now) {
   ExitStatus st = m.proc.exit_status().value_or(ExitStatus{});
   m.last_exit = st.describe();
   bool up_long = m.state == State::kUp && now - m.started > std::chrono::seconds(10);
-  bool restart = m.spec.restart == RestartPolicy::kAlways || (m.spec.restart == RestartPolicy::kOnFailure && !st.clean());
+  const bool asked = m.restart_requested;
+  m.restart_requested = false;
+  bool restart = asked || m.spec.restart == RestartPolicy::kAlways ||
+                 (m.spec.restart == RestartPolicy::kOnFailure && !st.clean());
   if (!came_up && !m.spec.heartbeat.empty()) m.start_failed = true;
   if (!restart) {
     m.state = st.clean() ? State::kExited : State::kFailed;
     say(m.spec.name + " (pid " + std::to_string(m.proc.pid()) + ") ended: " + m.last_exit + "; restart policy " +
         to_string(m.spec.restart) + ", not restarting" + (st.clean() ? "" : ": it stays down"));
+    return;
+  }
+  if (asked) {
+    say(m.spec.name + " (pid " + std::to_string(m.proc.pid()) + ") stopped for the operator's restart: " + m.last_exit +
+        "; starting it again");
+    m.state = State::kWaitingRestart;
+    m.restart_at = now;
     return;
   }
   m.quick_failures = up_long ? 0 : m.quick_failures + 1;
@@ -482,6 +525,7 @@ void Supervisor::before_heartbeat() {
   int restarts = 0;
   for (const auto& m : managed_) restarts += m.restarts;
   node_->set_value("restarts_total", restarts);
+  node_->set_value("restart_requests_unknown", static_cast<double>(unknown_commands_));
   node_->set_status(hs.status);
   node_->publish_report(channel(kHostStateChannel), hs);
 }

@@ -13,7 +13,9 @@
 // off, the link cut) is named in this host's status ("no host state from projector-host for 7 s")
 // until it is heard again; a host whose last message said it stopped is not missed.
 //
-// Subscribes: BL_HEARTBEAT (heartbeat_t), BL_HOST_STATE (host_state_t, the other hosts').
+// Subscribes: BL_HEARTBEAT (heartbeat_t), BL_HOST_STATE (host_state_t, the other hosts'), BL_COMMAND
+//             (command_t RESTART_MODULE "HOST/NAME" for this host: the module is stopped with SIGTERM and
+//             started again at once, whatever its restart policy; one in its backoff or failed starts now).
 // Publishes:  BL_HEARTBEAT (its own, module "launcher"); BL_HOST_STATE (host_state_t, once a second:
 //             every module's state, pid, restarts, uptime, counters summed across restarts, status).
 #pragma once
@@ -25,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "bricklayer/command_t.hpp"
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/host_state_t.hpp"
 #include "bricklayer/launcher/process.h"
@@ -102,10 +105,12 @@ class Supervisor {
     bool has_beat = false;
     Totals before;              // counters of the earlier processes of this module
     std::string last_exit;
+    bool restart_requested = false;  // the operator asked for a restart: the reap restarts it at once
   };
 
   void HandleHeartbeat(const heartbeat_t& hb);
   void HandleHostState(const host_state_t& hs);
+  void HandleCommand(const command_t& c);
   std::string silent_peers(Clock::time_point now) const;
   void tick();
   void before_heartbeat();
@@ -145,6 +150,7 @@ class Supervisor {
   std::map<std::string, Peer> peers_;  // other hosts, by host_state_t.host
   std::set<std::string> now_silent_;   // the hosts whose silence has been said
   Clock::time_point next_route_repair_{};
+  int64_t unknown_commands_ = 0;  // restarts asked for a module this host does not run
 };
 
 }  // namespace bricklayer::launcher
