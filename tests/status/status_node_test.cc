@@ -4,11 +4,14 @@
 
 #include <catch2/catch.hpp>
 
+#include <fstream>
+
 #include "bricklayer/common/channels.h"
 #include "bricklayer/launcher/supervisor.h"
 #include "bricklayer/status/status_node.h"
 #include "bricklayer/status/status_server.h"
 #include "harness/rig.h"
+#include "harness/scratch.h"
 
 using namespace bricklayer;
 using namespace std::chrono_literals;
@@ -93,6 +96,99 @@ TEST_CASE("the status node serves the host states published on the bus") {
   CHECK(node.server().not_found() == 1);
 }
 
+TEST_CASE("an operator's action with the token is published on the bus at the node's time, one without it is refused and counted") {
+  harness::Rig rig;
+  harness::ScratchDir dir("status-actions");
+  const std::string token = "fedcba9876543210fedcba9876543210";
+  std::ofstream(dir / "token") << token << "\n";
+  status::StatusConfig config;
+  config.port = 0;
+  config.token_file = (dir / "token").string();
+  auto& node = rig.add<status::StatusNode>(config);
+  auto& rec = rig.record({channel(kCommandChannel)});
+  CHECK(get_state(node.port())["actions"] == true);
+
+  httplib::Client client("127.0.0.1", node.port());
+  const std::string restart = R"({"action":"restart","host":"camera-host","module":"vision"})";
+  auto refused = client.Post("/action", restart, "application/json");
+  REQUIRE(refused);
+  CHECK(refused->status == 403);
+  auto wrong = client.Post("/action", {{"X-Bricklayer-Token", "0000000000000000"}}, restart, "application/json");
+  REQUIRE(wrong);
+  CHECK(wrong->status == 403);
+  auto bad = client.Post("/action", {{"X-Bricklayer-Token", token}}, "{\"action\":", "application/json");
+  REQUIRE(bad);
+  CHECK(bad->status == 400);
+  auto done = client.Post("/action", {{"X-Bricklayer-Token", token}}, restart, "application/json");
+  REQUIRE(done);
+  CHECK(done->status == 200);
+  CHECK(nlohmann::json::parse(done->body)["words"] == "vision on camera-host is restarted");
+
+  rig.step();
+  const auto sent = rec.all<command_t>(channel(kCommandChannel));
+  REQUIRE(sent.size() == 1);  // only the accepted one
+  CHECK(sent[0].command == command_t::RESTART_MODULE);
+  CHECK(sent[0].argument == "camera-host/vision");
+  CHECK(sent[0].utime >= rig.now() - 1000);  // the node's clock (the rig's), not the wall's
+  CHECK(sent[0].utime <= rig.now());
+  CHECK(sent[0].sequence == 1);
+  CHECK(node.desk().accepted() == 1);
+  CHECK(node.desk().refused() == 2);
+  CHECK(node.desk().bad() == 1);
+}
+
+TEST_CASE("without a token file the page is read-only and says so") {
+  harness::Rig rig;
+  harness::ScratchDir dir("status-readonly");
+  status::StatusConfig config;
+  config.port = 0;
+  config.token_file = (dir / "no-such-token").string();
+  auto& node = rig.add<status::StatusNode>(config);
+  auto& rec = rig.record({channel(kCommandChannel)});
+  CHECK(get_state(node.port())["actions"] == false);
+  httplib::Client client("127.0.0.1", node.port());
+  auto res = client.Post("/action", {{"X-Bricklayer-Token", "anything-anything"}}, R"({"action":"reset_round"})",
+                         "application/json");
+  REQUIRE(res);
+  CHECK(res->status == 503);
+  rig.step();
+  CHECK(rec.all<command_t>(channel(kCommandChannel)).empty());
+  CHECK(node.desk().refused() == 1);
+}
+
+TEST_CASE("each module's row carries its own heartbeat's figures, found by its pid") {
+  harness::Rig rig;
+  status::StatusConfig config;
+  config.port = 0;
+  auto& node = rig.add<status::StatusNode>(config);
+  host_state_t hs{};
+  hs.host = "camera-host";
+  hs.modules.resize(1);
+  hs.modules[0].name = "camera";
+  hs.modules[0].state = module_state_t::STATE_UP;
+  hs.modules[0].pid = 4242;
+  hs.num_modules = 1;
+  hs.modules_up = 1;
+  heartbeat_t hb{};
+  hb.module = "simcam";
+  hb.pid = 4242;
+  hb.value_names = {"frames_per_s", "drop_ratio"};
+  hb.values = {29.5, 0.0};
+  hb.num_values = 2;
+  heartbeat_t other = hb;
+  other.pid = 99;
+  other.values = {1.0, 1.0};
+  rig.publish(channel(launcher::kHostStateChannel), hs);
+  rig.publish(channel(kHeartbeatChannel), other);
+  rig.publish(channel(kHeartbeatChannel), hb);
+  rig.step();
+  const nlohmann::json j = get_state(node.port());
+  const nlohmann::json& f = j["hosts"][0]["modules"][0]["figures"];
+  CHECK(f["frames_per_s"] == 29.5);
+  CHECK(f["drop_ratio"] == 0.0);
+  CHECK(f.size() == 2);
+}
+
 TEST_CASE("a port already in use is a clear error") {
   harness::Rig rig;
   status::StatusConfig config;
@@ -105,8 +201,9 @@ TEST_CASE("a port already in use is a clear error") {
 TEST_CASE("a server destroyed right after it was built stops (its thread may not be listening yet)") {
   // Without the destructor waiting for the thread to listen, this hangs in its join (stop() came first).
   status::StatusBoard board;
+  status::ActionDesk desk("");
   for (int i = 0; i < 50; ++i) {
-    status::StatusServer server(board, "127.0.0.1", 0);
+    status::StatusServer server(board, desk, "127.0.0.1", 0);
     CHECK(server.port() > 0);
   }
 }

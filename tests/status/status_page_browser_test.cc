@@ -70,7 +70,10 @@ TEST_CASE("the status page in Chromium: no console errors, the modules' states, 
   std::ofstream(dir / "camera.json") << R"({"modules":[
       {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]},
       {"name":"broken","command":["/bin/false"],"heartbeat":"broken","backoff_max_s":0.3}]})";
-  harness::Program status("bricklayer-status", {"--lcm-url", kUrl, "--port", std::to_string(kPort)});
+  const std::string token = "0123456789abcdef0123456789abcdef";
+  std::ofstream(dir / "token") << token << "\n";
+  harness::Program status("bricklayer-status", {"--lcm-url", kUrl, "--port", std::to_string(kPort), "--token-file",
+                                                (dir / "token").string()});
   harness::Program launch("bricklayer-launch",
                           {"--root", dir.str(), "--bin-dir", std::string(BRICKLAYER_BINARY_DIR) + "/bin", "--lcm-url", kUrl,
                            (dir / "camera.json").string(), "--host-name", "camera-host"},
@@ -145,4 +148,36 @@ TEST_CASE("the status page in Chromium: no console errors, the modules' states, 
   const json again = row(watched, "prediction");
   REQUIRE(again.is_object());
   CHECK(again.at("cells").at(2) != "0");  // restarts
+
+  // The operator's restart button: refused with a wrong token (nothing happens), done with the right one:
+  // the launcher stops prediction and starts it again, the page sees the restart count go up.
+  const int before = prediction_pid_when_up(20s);
+  REQUIRE(before > 0);
+  harness::Ran pressed = harness::run_program(
+      node, {kScript, kPage, "--restart", "prediction", "--token", token, "--wrong-token", "not-the-token-at-all",
+             "--timeout-s", "40"},
+      60s);
+  INFO(pressed.err);
+  REQUIRE(pressed.status.code == 0);
+  const json r = json::parse(pressed.out);
+  INFO(pressed.out << "\nlaunch: " << launch.stderr_text() << launch.stdout_text());
+  CHECK(r.at("refused") == "Not done: wrong token: nothing was done");
+  CHECK(r.at("action") == "Done: prediction on camera-host is restarted");
+  const json& rt = r.at("transitions");
+  REQUIRE(rt.size() >= 2);
+  CHECK(rt.back().at("state") == "up");
+  CHECK(rt.back().at("restarts").get<int>() == rt.front().at("restarts").get<int>() + 1);
+  CHECK(r.at("errors").empty());
+  // The browser itself reports the refused request (a 403) in the console, and nothing else is there.
+  REQUIRE(r.at("console").size() == 1);
+  CHECK(r.at("console")[0].at("text").get<std::string>().find("status of 403 (Forbidden)") != std::string::npos);
+  const int after = prediction_pid_when_up(20s);
+  CHECK(after > 0);
+  CHECK(after != before);
+  CHECK(::kill(before, 0) != 0);  // the old process is gone
+  // The page's requests: one refused (wrong token), one accepted; the status program counts them.
+  httplib::Client client("127.0.0.1", kPort);
+  auto res = client.Post("/action", R"({"action":"reset_round"})", "application/json");
+  REQUIRE(res);
+  CHECK(res->status == 403);
 }

@@ -3,8 +3,12 @@
 // an operator would see: console messages, page errors, failed requests, the top line, the problems
 // and every module's row (its level and cells).
 // Usage: node status_page_check.mjs URL [--screenshot OUT.png] [--watch MODULE] [--timeout-s S]
+//                                        [--restart MODULE --token TOKEN [--wrong-token WRONG]]
 //   --watch MODULE: once MODULE's row says "up", prints "watching" on stderr, then records every change
 //   of the row's state, level and restarts until it has restarted and is up again (or the timeout): the test kills the module meanwhile.
+//   --restart MODULE: the same watch, but the restart is the page's own: it types WRONG (when given) into
+//   the token field and presses the module's restart button (the answer goes to "refused"), then TOKEN and
+//   presses it again (the answer goes to "action").
 // Prints one JSON object on stdout; exits 2 when the browser cannot be started or the page not opened.
 import { createRequire } from "node:module";
 import { dirname, join } from "node:path";
@@ -52,7 +56,19 @@ try {
   result.title = await page.title();
   // The first answer of /state.json has been drawn once a module row is there.
   await page.waitForSelector("tr[data-module]", { timeout: timeout_ms });
-  const watch = option("--watch");
+  const restart = option("--restart");
+  const watch = option("--watch") ?? restart;
+  const press = async (token) => {
+    await page.fill("#token", token);
+    await page.dispatchEvent("#token", "change");
+    const before = await page.textContent("#action-result");
+    await page.click(`tr[data-module="${restart}"] button`);
+    // The answer replaces the result line (the same words twice would not show a change: clear first).
+    await page.waitForFunction((b) => document.querySelector("#action-result").textContent !== b, before, { timeout: 10000 });
+    const text = await page.textContent("#action-result");
+    await page.evaluate(() => { document.querySelector("#action-result").textContent = ""; });
+    return text;
+  };
   if (watch) {
     const seen = async () => {
       const r = (await rows(page)).find((x) => x.module === watch);
@@ -63,6 +79,10 @@ try {
     let last = await seen();
     result.transitions.push(last);
     console.error("watching");
+    if (restart) {
+      if (option("--wrong-token") !== undefined) result.refused = await press(option("--wrong-token"));
+      result.action = await press(option("--token") ?? "");
+    }
     // A restart faster than the launcher's once-a-second state may never show as "restarting": the
     // restart count going up says it happened.
     const first = last.restarts;

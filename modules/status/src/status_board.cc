@@ -83,9 +83,31 @@ void StatusBoard::update(const round_t& round) {
   best_today_ = std::max(best_today_, round.max_score);
 }
 
+void StatusBoard::update(const heartbeat_t& hb) {
+  std::lock_guard lock(mutex_);
+  if (hb.pid <= 0 || hb.module == "launcher") return;
+  Figures& f = figures_[hb.pid];
+  f.received_utime = now_;
+  f.module = hb.module;
+  const size_t n = std::min({static_cast<size_t>(std::max(0, hb.num_values)), hb.value_names.size(), hb.values.size()});
+  f.names.assign(hb.value_names.begin(), hb.value_names.begin() + static_cast<std::ptrdiff_t>(n));
+  f.values.assign(hb.values.begin(), hb.values.begin() + static_cast<std::ptrdiff_t>(n));
+  for (auto it = figures_.begin(); it != figures_.end();)
+    it = now_ - it->second.received_utime > 60'000'000 ? figures_.erase(it) : std::next(it);
+}
+
 size_t StatusBoard::num_hosts() const {
   std::lock_guard lock(mutex_);
   return hosts_.size();
+}
+
+nlohmann::json StatusBoard::figures_of(int32_t pid) const {
+  nlohmann::json out = nlohmann::json::object();
+  const auto it = pid > 0 ? figures_.find(pid) : figures_.end();
+  if (it == figures_.end()) return out;
+  for (size_t i = 0; i < it->second.names.size(); ++i)
+    if (std::isfinite(it->second.values[i])) out[it->second.names[i]] = it->second.values[i];
+  return out;
 }
 
 nlohmann::json StatusBoard::to_json() const {
@@ -109,7 +131,7 @@ nlohmann::json StatusBoard::to_json() const {
                          {"words", r.words}, {"pid", m.pid}, {"restarts", m.restarts},
                          {"uptime_s", static_cast<double>(m.uptime_us) / 1e6}, {"status", m.status},
                          {"last_exit", m.last_exit}, {"received", m.received}, {"published", m.published},
-                         {"dropped", m.dropped}, {"errors", m.errors}});
+                         {"dropped", m.dropped}, {"errors", m.errors}, {"figures", figures_of(m.pid)}});
     }
     if (silent) {
       host_level = Level::failed;

@@ -25,6 +25,11 @@ constexpr const char* kPage = R"HTML(<!DOCTYPE html>
   td, th { text-align: left; padding: 3px 6px; border-bottom: 1px solid #eee; }
   .muted { color: #777; font-size: 0.85em; }
   #round { font-size: 1.05em; }
+  button { font-size: 0.95em; padding: 6px 10px; margin: 3px 4px 3px 0; border-radius: 6px; border: 1px solid #999; background: #fafafa; }
+  td button { padding: 2px 6px; font-size: 0.85em; }
+  input { font-size: 0.95em; padding: 4px 6px; margin: 3px 0; }
+  .figures { color: #555; font-size: 0.85em; }
+  .scroll { overflow-x: auto; }
 </style>
 </head>
 <body>
@@ -34,6 +39,18 @@ constexpr const char* kPage = R"HTML(<!DOCTYPE html>
 <div class="card" id="round-card"><h2>Round</h2><div id="round">No round heard of yet.</div>
   <div>Best today: <b id="best">0</b></div></div>
 <div id="hosts"></div>
+<div class="card" id="actions-card"><h2>Actions</h2>
+  <div id="actions-off" class="muted"></div>
+  <form id="token-form"><input type="text" name="username" value="operator" autocomplete="username" hidden>
+    <label>Operator token <input id="token" type="password" autocomplete="current-password" size="20"></label></form>
+  <div>
+    <button data-action="start_round">Start a round</button>
+    <button data-action="reset_round">Reset the round</button>
+    <button data-action="check_calibration">Check the calibration</button>
+  </div>
+  <div><input id="note" placeholder="what happened (optional)" size="24"> <button data-action="mark_moment">Mark this moment</button></div>
+  <div id="action-result" class="muted"></div>
+</div>
 <div class="muted" id="updated"></div>
 <script>
 "use strict";
@@ -74,22 +91,59 @@ function draw(state) {
       h.modules_up + " of " + h.num_modules + " modules up | " + h.status, "muted"));
     const table = el("table");
     const head = table.createTHead().insertRow();
-    for (const c of ["module", "state", "restarts", "up for", "status"]) head.appendChild(el("th", c));
+    for (const c of ["module", "state", "restarts", "up for", "status", "figures"]) head.appendChild(el("th", c));
     const body = table.createTBody();
     for (const m of h.modules) {
       const row = body.insertRow();
       row.className = m.level;
       row.dataset.module = m.name;
-      row.appendChild(el("td", m.name));
+      const name = el("td", m.name);
+      const restart = el("button", "restart");
+      restart.onclick = () => act({ action: "restart", host: h.host, module: m.name });
+      name.appendChild(el("br"));
+      name.appendChild(restart);
+      row.appendChild(name);
       row.appendChild(el("td", m.state));
       row.appendChild(el("td", m.restarts));
       row.appendChild(el("td", m.state === "up" ? duration(m.uptime_s) : ""));
       row.appendChild(el("td", m.words || m.status));
+      row.appendChild(el("td", figures(m.figures), "figures"));
     }
-    card.appendChild(table);
+    // A phone's width: the table scrolls sideways inside its card rather than spilling out of it.
+    const scroll = el("div", undefined, "scroll");
+    scroll.appendChild(table);
+    card.appendChild(scroll);
     return card;
   }));
+  document.getElementById("actions-off").textContent = state.actions ? "" :
+    "Actions are off on this machine (no token file): the page only shows the state.";
   document.getElementById("updated").textContent = "Updated " + new Date().toLocaleTimeString();
+}
+// A module's own figures from its heartbeat, at most six, each to three significant digits.
+function figures(f) {
+  if (!f) return "";
+  return Object.entries(f).slice(0, 6).map(([k, v]) => k + " " + Number(v.toPrecision(3))).join(" \u00b7 ");
+}
+// The token stays in this tab only (sessionStorage): a shared phone forgets it when the tab closes.
+const tokenInput = document.getElementById("token");
+tokenInput.value = sessionStorage.getItem("bricklayer-token") || "";
+tokenInput.onchange = () => sessionStorage.setItem("bricklayer-token", tokenInput.value);
+document.getElementById("token-form").onsubmit = (e) => e.preventDefault();  // Enter does not reload the page
+async function act(request) {
+  const result = document.getElementById("action-result");
+  try {
+    const res = await fetch("action", { method: "POST", cache: "no-store",
+      headers: { "Content-Type": "application/json", "X-Bricklayer-Token": tokenInput.value },
+      body: JSON.stringify(request) });
+    const answer = await res.json();
+    result.textContent = (answer.ok ? "Done: " : "Not done: ") + answer.words;
+  } catch (e) {
+    result.textContent = "Not done: this page cannot reach bricklayer-status.";
+  }
+}
+for (const b of document.querySelectorAll("#actions-card button")) {
+  b.onclick = () => act(b.dataset.action === "mark_moment"
+    ? { action: "mark_moment", note: document.getElementById("note").value } : { action: b.dataset.action });
 }
 let failures = 0;
 async function poll() {

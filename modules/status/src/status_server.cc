@@ -10,8 +10,8 @@
 
 namespace bricklayer::status {
 
-StatusServer::StatusServer(const StatusBoard& board, const std::string& listen, int port)
-    : board_(board), server_(std::make_unique<httplib::Server>()) {
+StatusServer::StatusServer(const StatusBoard& board, ActionDesk& desk, const std::string& listen, int port)
+    : board_(board), desk_(desk), server_(std::make_unique<httplib::Server>()) {
   server_->Get("/", [this](const httplib::Request&, httplib::Response& res) {
     ++requests_;
     res.set_content(status_page_html(), "text/html; charset=utf-8");
@@ -19,8 +19,18 @@ StatusServer::StatusServer(const StatusBoard& board, const std::string& listen, 
   server_->Get("/state.json", [this](const httplib::Request&, httplib::Response& res) {
     ++requests_;
     res.set_header("Cache-Control", "no-store");
-    res.set_content(board_.to_json().dump(), "application/json");
+    nlohmann::json state = board_.to_json();
+    state["actions"] = desk_.enabled();
+    res.set_content(state.dump(), "application/json");
   });
+  server_->Post("/action", [this](const httplib::Request& req, httplib::Response& res) {
+    ++requests_;
+    const ActionAnswer a = desk_.take(req.body, req.get_header_value("X-Bricklayer-Token"));
+    res.status = a.http_status;
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(nlohmann::json{{"ok", a.command.has_value()}, {"words", a.words}}.dump(), "application/json");
+  });
+  server_->set_payload_max_length(64 * 1024);  // an action is a few bytes of JSON
   server_->set_error_handler([this](const httplib::Request&, httplib::Response& res) {
     if (res.status == 404) ++not_found_;
   });

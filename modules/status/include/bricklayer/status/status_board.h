@@ -13,9 +13,11 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/host_state_t.hpp"
 #include "bricklayer/round_t.hpp"
 
@@ -49,13 +51,17 @@ class StatusBoard {
   // launcher (a new pid) takes its host's place instead of leaving a silent twin on the page.
   void update(const host_state_t& state, int64_t received_utime);
   void update(const round_t& round);
+  // A module's own heartbeat: its figures (values) are shown on its row, found by its pid. Heartbeats not
+  // renewed for a minute (a process that ended) are forgotten.
+  void update(const heartbeat_t& heartbeat);
 
   size_t num_hosts() const;
   // The whole page's data: {"utime", "level", "problems": [...], "hosts": [...], "round": {...} | null,
-  // "best_today"}.
+  // "best_today"}; each module of a host carries "figures": {name: value} from its latest heartbeat.
   nlohmann::json to_json() const;
 
  private:
+  nlohmann::json figures_of(int32_t pid) const;  // mutex held by the caller
   struct Host {
     host_state_t state;
     int64_t received_utime = 0;
@@ -65,6 +71,13 @@ class StatusBoard {
   int64_t now_ = 0;
   std::map<std::string, Host> hosts_;
   std::optional<round_t> round_;
+  struct Figures {
+    int64_t received_utime = 0;
+    std::string module;
+    std::vector<std::string> names;
+    std::vector<double> values;
+  };
+  std::map<int32_t, Figures> figures_;  // by pid
   // The best MAX of the day (UTC date of the round's utime) seen by this page; reset at midnight.
   int32_t best_today_ = 0;
   int64_t best_day_ = -1;

@@ -1,6 +1,8 @@
-// The status page's HTTP server (cpp-httplib): GET / (the page), GET /state.json (the board's JSON).
+// The status page's HTTP server (cpp-httplib): GET / (the page), GET /state.json (the board's JSON),
+// POST /action (an operator action with the token in the X-Bricklayer-Token header; operator_actions.h).
 // It runs in a thread of its own so a slow phone on the museum's Wi-Fi never holds up the node's bus
-// loop; it only reads the board, which guards itself with a mutex (status_board.h).
+// loop; it only reads the board and hands actions to the desk, both of which guard themselves with a
+// mutex (status_board.h, operator_actions.h).
 #pragma once
 
 #include <atomic>
@@ -9,6 +11,7 @@
 #include <string>
 #include <thread>
 
+#include "bricklayer/status/operator_actions.h"
 #include "bricklayer/status/status_board.h"
 
 namespace httplib {
@@ -21,7 +24,7 @@ class StatusServer {
  public:
   // Binds listen:port at once (port 0: any free port, see port()) and serves from a new thread.
   // Throws std::runtime_error when the address cannot be bound (in use, not this machine's).
-  StatusServer(const StatusBoard& board, const std::string& listen, int port);
+  StatusServer(const StatusBoard& board, ActionDesk& desk, const std::string& listen, int port);
   ~StatusServer();  // stops the server and joins its thread
   StatusServer(const StatusServer&) = delete;
   StatusServer& operator=(const StatusServer&) = delete;
@@ -32,6 +35,7 @@ class StatusServer {
 
  private:
   const StatusBoard& board_;
+  ActionDesk& desk_;
   std::unique_ptr<httplib::Server> server_;
   int port_ = 0;
   std::atomic<int64_t> requests_{0}, not_found_{0};
