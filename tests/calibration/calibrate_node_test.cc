@@ -3,7 +3,9 @@
 // answering its pattern commands: the closed loop of the exhibit, on a clock that moves only when the
 // test steps it. A full calibration completes within the documented bounds (--max-error-px and
 // --max-point-error-px, and within 1.5 projector px of simcam's true mapping); the self-check on the
-// empty board passes unmoved and reports drift for a moved camera; without a projector the run fails
+// empty board passes unmoved and reports drift for a moved camera; --scale-from-blocks puts the bottom
+// row's board x within 0.01 block lengths; --serve republishes and self-checks on command only on an
+// empty board; without a projector the run fails
 // after exactly twice --timeout of bus time with a counted error naming what is missing; the same
 // run twice writes the same file byte for byte, and so does the node alone replaying the recorded
 // run on the log bus (twice, and the same as the live run).
@@ -11,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bricklayer/board/board_geometry.h"
 #include "bricklayer/board/calibration_file.h"
 #include "bricklayer/board/mapping.h"
 #include "bricklayer/calibration/calibrate_node.h"
@@ -50,6 +53,28 @@ std::string empty_scenario(const harness::ScratchDir& dir) {
                                            {"keyframes", nlohmann::json::array({{{"t", 0}, {"blocks", nlohmann::json::array()}}})}}
                                 .dump());
   return path;
+}
+
+// Four blocks standing apart on the bottom row and one on top, for ten minutes (--scale-from-blocks).
+std::string blocks_scenario(const harness::ScratchDir& dir) {
+  const std::string path = dir / "blocks.json";
+  nlohmann::json blocks = nlohmann::json::array();
+  for (auto [id, row, x] : {std::tuple<int, int, double>{1, 0, -3.4}, {2, 0, -1.9}, {3, 0, -0.6}, {4, 0, 0.7}, {5, 1, -3.1}})
+    blocks.push_back({{"id", id}, {"row", row}, {"x", x}});
+  harness::write_file(path, nlohmann::json{{"description", "four blocks apart on the bottom row, one on top"},
+                                           {"nuisance", "mild"},
+                                           {"seed", 7},
+                                           {"duration_s", 600},
+                                           {"keyframes", nlohmann::json::array({{{"t", 0}, {"blocks", blocks}}})}}
+                                .dump());
+  return path;
+}
+
+// Board x the calibration reads at true board (x, y) of simcam's setup.
+double calibrated_x(const calibration_t& c, uint64_t seed, double x, double y = 0.2) {
+  const simcam::CameraSetup camera = simcam::CameraSetup::random(seed);
+  const BoardGeometry& g = camera.board;
+  return board::camera_to_board(c, simcam::rectified_to_camera(camera, {g.to_px_x(x), g.to_px_y(y)})).x;
 }
 
 simcam::SimcamConfig camera_config(const std::string& scenario, int64_t setup_seed) {
@@ -275,6 +300,32 @@ TEST_CASE("the calibrate node's self-check on the empty board passes unmoved and
     CHECK(*drift > config.drift_threshold);
   }
   CHECK(harness::read_file(config.output) == before);  // a self-check never writes
+}
+
+TEST_CASE("the calibrate node corrects the board scale from blocks standing apart on the bottom row") {
+  harness::ScratchDir dir("calibrate-node-scale");
+  CalibrateConfig config = calibrate_config(dir / "calibration.json");
+  std::filesystem::copy_file(calibrated_file(), config.output);
+  config.scale_from_blocks = true;
+  const calibration_t before = board::load_calibration(config.output);
+  double worst_before = 0;
+  for (double x : {-3.0, -1.0, 1.0, 3.0}) worst_before = std::max(worst_before, std::abs(calibrated_x(before, kSetupSeed, x) - x));
+  INFO("bottom row board x off by up to " << worst_before << " block lengths as calibrated");
+  const Run r = run_calibrate(config, blocks_scenario(dir), kSetupSeed, true, 30s);
+  INFO("status " << r.status);
+  REQUIRE(r.finished);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.errors == 0);
+  const calibration_t after = board::load_calibration(config.output);
+  REQUIRE(r.published.size() == 1);
+  CHECK(runtime::encode(r.published.front()) == runtime::encode(after));
+  CHECK(after.utime == runtime::InProcessBus::kDefaultStartUtime + r.bus_us);  // the bus clock when corrected
+  double worst_after = 0;
+  for (double x : {-3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0})
+    worst_after = std::max(worst_after, std::abs(calibrated_x(after, kSetupSeed, x) - x));
+  INFO("and up to " << worst_after << " after the correction");
+  CHECK(worst_after < 0.01);  // measured 0.0069 (0.26 as calibrated)
+  CHECK(worst_after < worst_before);
 }
 
 TEST_CASE("the calibrate node serves its file and self-checks on command only while the board is empty") {
