@@ -2,6 +2,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
 using namespace bricklayer::vision;
 using bricklayer::detection::DetectedBlock;
 
@@ -77,4 +79,31 @@ TEST_CASE("the lag: how far the published x is from the latest measurement, the 
   out = filter.update({});  // unseen, held
   REQUIRE(out.size() == 1);
   CHECK(out[0].lag == 0.01);
+}
+
+TEST_CASE("the spread: the standard deviation of a block's recent measured x, started afresh when it is moved") {
+  TemporalFilter filter;
+  auto seen = [](double x) { return std::vector<DetectedBlock>{at(0, x)}; };
+  filter.update(seen(-0.500), {0.001});
+  auto out = filter.update(seen(-0.502), {0.002});
+  REQUIRE(out.size() == 1);
+  CHECK(out[0].spread_samples == 2);
+  CHECK(out[0].spread == Approx(std::sqrt(2.0) * 0.001));  // two samples 0.002 apart
+  CHECK(out[0].measured_uncertainty == 0.002);             // the latest measurement's
+  // Ten frames alternating around -0.501: the window keeps the last kSpreadFrames.
+  for (int k = 0; k < 10; ++k) out = filter.update(seen(k % 2 ? -0.500 : -0.502), {0.003});
+  CHECK(out[0].spread_samples == kSpreadFrames);
+  CHECK(out[0].spread == Approx(0.001 * std::sqrt(8.0 / 7.0)));
+  CHECK(out[0].block.x == -0.5);  // inside the deadband throughout
+  // Unseen: the spread and the last measurement's uncertainty stay, the lag is the deadband.
+  out = filter.update({});
+  CHECK(out[0].spread_samples == kSpreadFrames);
+  CHECK(out[0].measured_uncertainty == 0.003);
+  // Moved by a hand (0.1, within the match distance, beyond the history reset): the history starts again.
+  out = filter.update(seen(-0.4), {0.001});
+  REQUIRE(out.size() == 1);
+  CHECK(out[0].block.x == -0.4);
+  CHECK(out[0].spread_samples == 1);
+  CHECK(out[0].spread == 0.0);
+  CHECK_THROWS_WITH(filter.update(seen(-0.4), {0.001, 0.002}), Catch::Contains("2 uncertainties for 1 detections"));
 }

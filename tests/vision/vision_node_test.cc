@@ -191,3 +191,37 @@ TEST_CASE("the vision configuration is checked where it is declared") {
   c.json = true;
   CHECK_THROWS_WITH(vision::VisionNode::check(c), Catch::Contains("--json needs --images"));
 }
+
+TEST_CASE("every published block carries its own position uncertainty, never below the calibration's residual or --min-uncertainty") {
+  const auto jpeg = rendered_jpeg(three_blocks());
+  auto last_stack = [&](const vision::VisionConfig& config, const calibration_t* calibration) {
+    harness::Rig rig;
+    rig.add<vision::VisionNode>(config);
+    auto& rec = rig.record({kStacks});
+    if (calibration) rig.publish(channel(kCalibrationChannel), *calibration);
+    for (int f = 0; f < 6; ++f) {
+      rig.publish(kImages, jpeg_frame(jpeg, f));
+      rig.step();
+    }
+    const auto stacks = rec.all<stack_t>(kStacks);
+    REQUIRE(!stacks.empty());
+    REQUIRE(stacks.back().num_blocks == 3);
+    return stacks.back();
+  };
+  // Measured: positive, small on a mild frame (a few thousandths of a block at most), and covering the error.
+  const stack_t measured = last_stack({}, nullptr);
+  const core::Stack truth = three_blocks();
+  for (size_t k = 0; k < 3; ++k) {
+    CHECK(measured.blocks[k].x_uncertainty > 0.0);
+    CHECK(measured.blocks[k].x_uncertainty < 0.005);
+    CHECK(std::abs(measured.blocks[k].x - truth.blocks[k].x) <= measured.blocks[k].x_uncertainty);
+  }
+  vision::VisionConfig floor;
+  floor.min_uncertainty = 0.02;
+  for (const block_t& b : last_stack(floor, nullptr).blocks) CHECK(b.x_uncertainty == 0.02);
+  // A calibration whose residual is 1 projector pixel: 1/96 block lengths in the default setup.
+  calibration_t calibration = board::default_calibration();
+  calibration.reprojection_error_mean_px = 1.0;
+  calibration.reprojection_error_max_px = 1.0;
+  for (const block_t& b : last_stack({}, &calibration).blocks) CHECK(b.x_uncertainty == Approx(1.0 / 96));
+}

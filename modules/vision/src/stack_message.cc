@@ -1,5 +1,8 @@
 #include "bricklayer/vision/stack_message.h"
 
+#include <stdexcept>
+#include <string>
+
 #include <nlohmann/json.hpp>
 
 namespace bricklayer::vision {
@@ -25,11 +28,7 @@ stack_t empty_stack(const BoardFrame& frame, int64_t utime, int64_t frame_number
   return s;
 }
 
-// Vision's p95 error of x on simcam frames at the harshest nuisance level (README "Accuracy and speed"): the part of a
-// block's position uncertainty the measurement itself brings; prediction raises it to its floor.
-constexpr double kMeasurementUncertainty = 0.0015;
-
-block_t to_block(int64_t id, const DetectedBlock& b, double lag = 0.0) {
+block_t to_block(int64_t id, const DetectedBlock& b, double x_uncertainty) {
   block_t m{};
   m.id = id;
   m.row = b.row;
@@ -39,8 +38,14 @@ block_t to_block(int64_t id, const DetectedBlock& b, double lag = 0.0) {
     m.corner_v[c] = b.corner_v[c];
   }
   m.confidence = b.confidence;
-  m.x_uncertainty = kMeasurementUncertainty + lag;
+  m.x_uncertainty = x_uncertainty;
   return m;
+}
+
+void check_count(const std::vector<double>& u, size_t blocks) {
+  if (!u.empty() && u.size() != blocks)
+    throw std::invalid_argument("stack message: " + std::to_string(u.size()) + " uncertainties for " +
+                                std::to_string(blocks) + " blocks");
 }
 }  // namespace
 
@@ -48,17 +53,22 @@ stack_t no_frame_stack(const BoardFrame& frame, int64_t utime, int64_t frame_num
   return empty_stack(frame, utime, frame_number, stack_t::STATUS_NO_FRAME);
 }
 
-stack_t to_stack_message(const Detection& detection, const BoardFrame& frame, int64_t utime, int64_t frame_number) {
+stack_t to_stack_message(const Detection& detection, const BoardFrame& frame, int64_t utime, int64_t frame_number,
+                         const std::vector<double>& x_uncertainty) {
+  check_count(x_uncertainty, detection.blocks.size());
   stack_t s = empty_stack(frame, utime, frame_number, static_cast<int8_t>(detection.status));
-  for (size_t i = 0; i < detection.blocks.size(); ++i) s.blocks.push_back(to_block(static_cast<int64_t>(i), detection.blocks[i]));
+  for (size_t i = 0; i < detection.blocks.size(); ++i)
+    s.blocks.push_back(to_block(static_cast<int64_t>(i), detection.blocks[i], x_uncertainty.empty() ? 0.0 : x_uncertainty[i]));
   s.num_blocks = static_cast<int32_t>(s.blocks.size());
   return s;
 }
 
 stack_t to_stack_message(const std::vector<FilteredBlock>& blocks, const BoardFrame& frame, int64_t utime,
-                         int64_t frame_number) {
+                         int64_t frame_number, const std::vector<double>& x_uncertainty) {
+  check_count(x_uncertainty, blocks.size());
   stack_t s = empty_stack(frame, utime, frame_number, stack_t::STATUS_OK);
-  for (const FilteredBlock& b : blocks) s.blocks.push_back(to_block(b.id, b.block, b.lag));
+  for (size_t i = 0; i < blocks.size(); ++i)
+    s.blocks.push_back(to_block(blocks[i].id, blocks[i].block, x_uncertainty.empty() ? 0.0 : x_uncertainty[i]));
   s.num_blocks = static_cast<int32_t>(s.blocks.size());
   return s;
 }

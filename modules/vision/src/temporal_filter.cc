@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <tuple>
 
 namespace bricklayer::vision {
@@ -13,8 +14,9 @@ using detection::DetectedBlock;
 TemporalFilter::TemporalFilter(const TemporalFilterConfig& config) : config_(config) {
   if (config.confirm_window < 1 || config.confirm_window > 32 || config.confirm_hits < 1 ||
       config.confirm_hits > config.confirm_window || config.hold_frames < 0 || !(config.deadband >= 0) ||
-      !(config.match_distance > 0))
-    throw std::invalid_argument("temporal filter: need 1 <= N <= M <= 32, hold >= 0, deadband >= 0, match > 0");
+      !(config.match_distance > 0) || !(config.history_reset > 0))
+    throw std::invalid_argument(
+        "temporal filter: need 1 <= N <= M <= 32, hold >= 0, deadband >= 0, match > 0, history reset > 0");
 }
 
 void TemporalFilter::reset() {
@@ -22,7 +24,36 @@ void TemporalFilter::reset() {
   next_id_ = 0;
 }
 
-std::vector<FilteredBlock> TemporalFilter::update(const std::vector<DetectedBlock>& detections) {
+void TemporalFilter::remember(Track& t, double x, double reset) {
+  if (t.recent_count > 0) {
+    double mean = 0;
+    for (int k = 0; k < t.recent_count; ++k) mean += t.recent[static_cast<size_t>(k)];
+    mean /= t.recent_count;
+    if (std::abs(x - mean) > reset) t.recent_count = 0, t.recent_next = 0;
+  }
+  t.recent[static_cast<size_t>(t.recent_next)] = x;
+  t.recent_next = (t.recent_next + 1) % kSpreadFrames;
+  t.recent_count = std::min(t.recent_count + 1, kSpreadFrames);
+}
+
+FilteredBlock TemporalFilter::output(const Track& t) {
+  FilteredBlock b{t.id, t.published, t.missed, t.lag, t.measured_uncertainty, 0.0, t.recent_count};
+  if (t.recent_count >= 2) {
+    double mean = 0, ss = 0;
+    for (int k = 0; k < t.recent_count; ++k) mean += t.recent[static_cast<size_t>(k)];
+    mean /= t.recent_count;
+    for (int k = 0; k < t.recent_count; ++k) ss += (t.recent[static_cast<size_t>(k)] - mean) * (t.recent[static_cast<size_t>(k)] - mean);
+    b.spread = std::sqrt(ss / (t.recent_count - 1));
+  }
+  return b;
+}
+
+std::vector<FilteredBlock> TemporalFilter::update(const std::vector<DetectedBlock>& detections,
+                                                  const std::vector<double>& uncertainties) {
+  if (!uncertainties.empty() && uncertainties.size() != detections.size())
+    throw std::invalid_argument("temporal filter: " + std::to_string(uncertainties.size()) + " uncertainties for " +
+                                std::to_string(detections.size()) + " detections");
+  auto uncertainty = [&](size_t d) { return uncertainties.empty() ? 0.0 : uncertainties[d]; };
   // Greedy association by distance, nearest pairs first, same row only; ties broken by index so the
   // result does not depend on anything but the inputs.
   struct Candidate {
@@ -54,6 +85,8 @@ std::vector<FilteredBlock> TemporalFilter::update(const std::vector<DetectedBloc
     track.history = (track.history << 1) & window_mask;
     if (track_match[t] >= 0) {
       const DetectedBlock& m = detections[track_match[t]];
+      track.measured_uncertainty = uncertainty(static_cast<size_t>(track_match[t]));
+      remember(track, m.x, config_.history_reset);
       track.history |= 1u;
       track.missed = 0;
       const double x_before = track.published.x;
@@ -83,6 +116,8 @@ std::vector<FilteredBlock> TemporalFilter::update(const std::vector<DetectedBloc
   for (size_t d = 0; d < detections.size(); ++d) {
     if (detection_match[d] >= 0) continue;
     Track track{next_id_++, detections[d], 1u, 0, config_.confirm_hits <= 1};
+    track.measured_uncertainty = uncertainty(d);
+    remember(track, detections[d].x, config_.history_reset);
     kept.push_back(track);
   }
   tracks_ = std::move(kept);
@@ -102,7 +137,7 @@ std::vector<FilteredBlock> TemporalFilter::update(const std::vector<DetectedBloc
   tracks_ = std::move(live);
   std::vector<FilteredBlock> out;
   for (const Track& t : tracks_)
-    if (t.confirmed) out.push_back({t.id, t.published, t.missed, t.lag});
+    if (t.confirmed) out.push_back(output(t));
   std::sort(out.begin(), out.end(), [](const FilteredBlock& a, const FilteredBlock& b) {
     return std::tie(a.block.row, a.block.x, a.id) < std::tie(b.block.row, b.block.x, b.id);
   });

@@ -1,5 +1,6 @@
 #include "bricklayer/vision/vision_node.h"
 
+#include <algorithm>
 #include <iostream>
 #include <sstream>
 
@@ -123,6 +124,7 @@ VisionNode::VisionNode(const Config& config, runtime::Bus& bus)
       use_filter_(!config.no_filter),
       source_(open_source(config)),
       require_calibration_(config.require_calibration),
+      min_uncertainty_(config.min_uncertainty),
       stack_channel_(channel(kStackChannel)),
       timing_channel_(channel(kTimingChannel)) {
   if (require_calibration_ && !calibration_) {
@@ -212,6 +214,12 @@ void VisionNode::read_source() {
   process(frame, utime, number, now(), "", watch.elapsed_us());
 }
 
+double VisionNode::block_uncertainty(const DetectedBlock& b, double measured, double temporal, double lag) const {
+  // The calibration's residual where the block stands (its left end, half way up its row).
+  const double floor = calibration_ ? calibration_floor(*calibration_, b.x, (b.row + 0.5) * block_height_blocks(detector_.frame())) : 0.0;
+  return published_uncertainty(measured, temporal, lag, floor, min_uncertainty_);
+}
+
 void VisionNode::process(const cv::Mat& frame, int64_t utime, int64_t frame_number, int64_t received_utime,
                          const std::string& decode_error, int64_t elapsed_before_us) {
   ++frames_seen_;
@@ -220,13 +228,29 @@ void VisionNode::process(const cv::Mat& frame, int64_t utime, int64_t frame_numb
   if (require_calibration_ && !calibration_) return;
   const messages::Stopwatch watch;
   Detection d;
+  std::vector<double> uncertainties;  // per block of d.blocks: this frame's measurement
   if (frame.empty()) {
     d.status = Detection::kNoFrame;
   } else {
     d = detector_.detect(frame);
-    published_ += make_publishable(d.blocks, detector_.frame(), frame.size());
+    // Each block's own measurement uncertainty, from the pixels it was measured in (before the publishing
+    // rules move touching blocks: the lines are where the detector found them).
+    const std::vector<BlockEvidence> evidence = measure_evidence(frame, detector_.frame(), d.blocks);
+    struct Measured {
+      DetectedBlock block;
+      double uncertainty;
+    };
+    std::vector<Measured> measured;
+    for (size_t i = 0; i < d.blocks.size(); ++i)
+      measured.push_back({d.blocks[i], frame_uncertainty(evidence[i], detector_.frame().geometry().block_length_px)});
+    published_ += make_publishable(measured, [](Measured& m) -> DetectedBlock& { return m.block; }, detector_.frame(),
+                                   frame.size());
+    d.blocks.clear();
+    uncertainties.clear();
+    for (const Measured& m : measured) d.blocks.push_back(m.block), uncertainties.push_back(m.uncertainty);
   }
   stack_t out;
+  std::vector<double> published_u;
   if (d.status == Detection::kNoFrame) {
     error("bad frames", decode_error.empty()
                             ? "frame " + std::to_string(frame_number) + ": empty or wrongly sized for the calibration"
@@ -237,12 +261,16 @@ void VisionNode::process(const cv::Mat& frame, int64_t utime, int64_t frame_numb
   } else if (use_filter_) {
     // The filter holds lost blocks and keeps positions inside its deadband: apply the publishing rules
     // again to what it returns.
-    std::vector<FilteredBlock> blocks = filter_.update(d.blocks);
+    std::vector<FilteredBlock> blocks = filter_.update(d.blocks, uncertainties);
     published_ += make_publishable(blocks, [](FilteredBlock& b) -> DetectedBlock& { return b.block; },
                                    detector_.frame(), frame.size());
-    out = to_stack_message(blocks, detector_.frame(), utime, frame_number);
+    for (const FilteredBlock& b : blocks)
+      published_u.push_back(block_uncertainty(b.block, b.measured_uncertainty,
+                                              temporal_uncertainty(b.spread, b.spread_samples), b.lag));
+    out = to_stack_message(blocks, detector_.frame(), utime, frame_number, published_u);
   } else {
-    out = to_stack_message(d, detector_.frame(), utime, frame_number);
+    for (size_t i = 0; i < d.blocks.size(); ++i) published_u.push_back(block_uncertainty(d.blocks[i], uncertainties[i], 0.0, 0.0));
+    out = to_stack_message(d, detector_.frame(), utime, frame_number, published_u);
   }
   const int64_t elapsed = elapsed_before_us + watch.elapsed_us();
   publish(stack_channel_, out);
@@ -255,6 +283,11 @@ void VisionNode::process(const cv::Mat& frame, int64_t utime, int64_t frame_numb
   set_value("moved_total", static_cast<double>(published_.moved));
   set_value("dropped_overlap_total", static_cast<double>(published_.dropped_overlap));
   set_value("dropped_border_total", static_cast<double>(published_.dropped_border));
+  if (!published_u.empty()) {
+    std::nth_element(published_u.begin(), published_u.begin() + static_cast<std::ptrdiff_t>(published_u.size() / 2),
+                     published_u.end());
+    set_value("uncertainty_median", published_u[published_u.size() / 2]);
+  }
   set_value("detect_ms", static_cast<double>(elapsed) / 1000.0);
   if (!source_done_) set_status(d.status == Detection::kNoBoard ? "board not visible" : "ok");
 }

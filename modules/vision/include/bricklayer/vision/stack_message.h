@@ -17,10 +17,12 @@ namespace bricklayer::vision {
 double block_height_blocks(const detection::BoardFrame& frame);
 
 // A stack message from a detection (ids 0.. left to right, bottom row first) or from filtered blocks.
+// `x_uncertainty`: each block's published half-width (position_uncertainty.h), one per block in the same
+// order, or empty for none (0: prediction then uses its floor). Throws std::invalid_argument for another count.
 stack_t to_stack_message(const detection::Detection& detection, const detection::BoardFrame& frame, int64_t utime,
-                         int64_t frame_number);
+                         int64_t frame_number, const std::vector<double>& x_uncertainty = {});
 stack_t to_stack_message(const std::vector<FilteredBlock>& blocks, const detection::BoardFrame& frame, int64_t utime,
-                         int64_t frame_number);
+                         int64_t frame_number, const std::vector<double>& x_uncertainty = {});
 stack_t no_frame_stack(const detection::BoardFrame& frame, int64_t utime, int64_t frame_number);
 
 // One line of bricklayer-predict's input:

@@ -8,7 +8,9 @@
 //             STATUS_NO_FRAME for a corrupt, empty, truncated or wrongly sized frame; never a stack
 //             bricklayer-prediction rejects: see publishable.h; none at all with --require-calibration
 //             until a calibration is loaded or arrives), BL_TIMING (timing_t, stage "detect"),
-//             BL_HEARTBEAT (counters; values: blocks, lines, rejected_wide, rejected_faint, detect_ms, and
+//             Every block carries its position uncertainty (block_t.x_uncertainty, position_uncertainty.h).
+//             BL_HEARTBEAT (counters; values: blocks, lines, rejected_wide, rejected_faint, detect_ms,
+//             uncertainty_median (block lengths, over the published blocks of the last stack), and
 //             totals moved_total, dropped_overlap_total, dropped_border_total; status "no frames for N s"
 //             when BL_IMAGE falls silent).
 // Offline:    --images DIR --json prints one bricklayer-predict input line per image (name order),
@@ -26,6 +28,7 @@
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/runtime/config.h"
 #include "bricklayer/runtime/node.h"
+#include "bricklayer/vision/position_uncertainty.h"
 #include "bricklayer/vision/publishable.h"
 #include "bricklayer/vision/temporal_filter.h"
 
@@ -42,6 +45,7 @@ struct VisionConfig {
   std::string confirm = "2/3";
   int hold = 3;
   double deadband = 0.01;
+  double min_uncertainty = 0.0;
 
   template <typename Visitor>
   void visit(Visitor& v) {
@@ -67,6 +71,11 @@ struct VisionConfig {
     v(runtime::param("hold", hold, "temporal filter: frames a lost block is held").range(0, 1000));
     v(runtime::param("deadband", deadband, "temporal filter: x changes smaller than this (block lengths) are not published")
           .range(0, 1));
+    v(runtime::param("min-uncertainty", min_uncertainty,
+                     "smallest position uncertainty (block lengths, half-width) any published block carries: for what "
+                     "vision cannot see in one camera's frames (e.g. a board that is not flat); the calibration's "
+                     "residual is a floor already")
+          .range(0, 0.05));
   }
 
   // "N/M" with 1 <= N <= M; "" when it is one, else why not.
@@ -99,6 +108,8 @@ class VisionNode final : public runtime::Node {
   void on_projector(const projector_state_t& state);
   void tick() override;
   void read_source();
+  // Each block's published half-width: its measurement, the filter's spread and lag, the two floors.
+  double block_uncertainty(const detection::DetectedBlock& block, double measured, double temporal, double lag) const;
   void process(const cv::Mat& frame, int64_t utime, int64_t frame_number, int64_t received_utime,
                const std::string& decode_error, int64_t elapsed_before_us);
 
@@ -113,6 +124,7 @@ class VisionNode final : public runtime::Node {
   int64_t unreadable_seen_ = 0;
   bool source_done_ = false;
   bool require_calibration_;
+  double min_uncertainty_;
   int64_t frames_seen_ = 0;
   PublishCounts published_;
   std::string stack_channel_, timing_channel_;

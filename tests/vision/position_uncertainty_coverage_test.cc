@@ -1,0 +1,145 @@
+// Is the position uncertainty vision publishes honest? VisionNode on the in-process rig, fed simcam-rendered
+// JPEG frames of random piles (a third with touching blocks, a third 0.02 apart), each pile for a few frames
+// with fresh noise, in five kinds of scene: clean, blurred, noisy, low contrast (a dim board with shadows) and
+// simcam's harsh level (all of it). Every published block is compared with simcam's truth: its x_uncertainty
+// must cover |x - truth| on at least 95% of blocks in every kind of scene, and it must be narrower where the
+// measurement is better (clean narrower than blurred and than noisy). Prints coverage, median and p95
+// half-width per kind of scene (the vision README's "Position uncertainty" table).
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "bricklayer/common/channels.h"
+#include "bricklayer/simcam/piles.h"
+#include "bricklayer/simcam/render.h"
+#include "bricklayer/stack_t.hpp"
+#include "bricklayer/vision/vision_node.h"
+#include "harness/rig.h"
+
+using namespace bricklayer;
+using namespace std::chrono_literals;
+
+namespace {
+
+struct Scene {
+  std::string name;
+  simcam::Nuisance nuisance;
+  double board_brightness = 170.0;
+};
+
+std::vector<Scene> scenes() {
+  std::vector<Scene> s;
+  const simcam::Nuisance clean = simcam::Nuisance::level(0);
+  s.push_back({"clean", clean});
+  simcam::Nuisance blurred = clean;
+  blurred.blur_sigma = 1.6;  // beyond the harsh level's 1.2
+  blurred.noise = 0.5;
+  s.push_back({"blurred", blurred});
+  simcam::Nuisance noisy = clean;
+  noisy.noise = 6.0;  // beyond the harsh level's 3.5
+  noisy.read_noise = 2.0;
+  s.push_back({"noisy", noisy});
+  simcam::Nuisance dim = clean;  // a third of the light: lines a third as deep in 8-bit levels
+  dim.noise = 1.5;
+  dim.read_noise = 1.0;
+  dim.shadow_strength = 0.5;
+  dim.shadow_count = 2;
+  s.push_back({"low contrast", dim, 55.0});
+  s.push_back({"harsh", simcam::Nuisance::level(3)});
+  return s;
+}
+
+image_t jpeg_image(const cv::Mat& bgr, int64_t number) {
+  image_t img{};
+  std::vector<uint8_t> jpeg;
+  cv::imencode(".jpg", bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90});  // as simcam publishes frames
+  img.utime = 1000 + number * 33333;
+  img.frame_number = number;
+  img.width = bgr.cols;
+  img.height = bgr.rows;
+  img.format = image_t::FORMAT_JPEG;
+  img.source = "test";
+  img.data = jpeg;
+  img.size = static_cast<int32_t>(jpeg.size());
+  return img;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
+}
+
+struct Figures {
+  int blocks = 0, covered = 0, unmatched = 0;
+  std::vector<double> width, error;
+  double coverage() const { return blocks ? static_cast<double>(covered) / blocks : 0.0; }
+};
+
+// Piles `piles` of one kind of scene, `frames` frames each, through a fresh vision node per pile.
+Figures run_scene(const Scene& scene, int piles, int frames, uint64_t seed) {
+  Figures fig;
+  simcam::CameraSetup camera;
+  camera.board_brightness = scene.board_brightness;
+  const simcam::Renderer renderer(camera);
+  const std::string images = channel(kImageChannel), stacks = channel(kStackChannel);
+  for (int p = 0; p < piles; ++p) {
+    simcam::PileOptions options;
+    options.blocks = 14;
+    options.min_gap = p % 3 == 0 ? 0.0 : (p % 3 == 1 ? 0.02 : 0.1);
+    const core::Stack pile = simcam::random_pile(seed + static_cast<uint64_t>(p), options);
+    harness::Rig rig;
+    rig.add<vision::VisionNode>(vision::VisionConfig{});
+    auto& rec = rig.record({stacks});
+    for (int f = 0; f < frames; ++f) {
+      simcam::Nuisance n = scene.nuisance;
+      n.layout_seed = seed + static_cast<uint64_t>(p);  // shadows stay, noise is new in every frame
+      n.time_s = f / 30.0;
+      const simcam::Rendered r = renderer.render(pile, n, nullptr, seed * 1000 + static_cast<uint64_t>(p * 100 + f));
+      rig.publish(images, jpeg_image(r.bgr, f));
+      const auto s = rec.wait_for<stack_t>(stacks, [f](const stack_t& m) { return m.frame_number == f; }, 100ms);
+      REQUIRE(s);
+      for (const block_t& b : s->blocks) {
+        double error = 1e9;
+        for (const simcam::TrueBlock& t : r.truth)
+          if (t.row == b.row && std::abs(b.x - t.x) < error) error = std::abs(b.x - t.x);
+        if (error > 0.3) {  // not a block simcam drew: the detector's business, counted apart
+          ++fig.unmatched;
+          continue;
+        }
+        ++fig.blocks;
+        fig.covered += error <= b.x_uncertainty;
+        fig.width.push_back(b.x_uncertainty);
+        fig.error.push_back(error);
+      }
+    }
+  }
+  return fig;
+}
+
+}  // namespace
+
+TEST_CASE("the published position uncertainty covers the true error on 95% of blocks, and is narrower where the frames are sharper") {
+  std::map<std::string, Figures> by_scene;
+  std::printf("| scene | blocks | coverage | median half-width | p95 half-width | median |dx| | p95 |dx| |\n|---|---|---|---|---|---|---|\n");
+  for (const Scene& scene : scenes()) {
+    const Figures f = run_scene(scene, 9, 10, 900);
+    std::printf("| %s | %d | %.1f%% | %.4f | %.4f | %.4f | %.4f |\n", scene.name.c_str(), f.blocks, 100.0 * f.coverage(),
+                percentile(f.width, 0.5), percentile(f.width, 0.95), percentile(f.error, 0.5), percentile(f.error, 0.95));
+    INFO(scene.name << ": " << f.blocks << " blocks, coverage " << f.coverage());
+    CHECK(f.blocks >= 9 * 8 * 12);  // the detector found (nearly) every block after the filter confirmed it
+    CHECK(f.unmatched == 0);
+    CHECK(f.coverage() >= 0.95);
+    by_scene[scene.name] = f;
+  }
+  std::fflush(stdout);
+  const double clean = percentile(by_scene["clean"].width, 0.5);
+  CHECK(clean < percentile(by_scene["blurred"].width, 0.5));
+  CHECK(clean < percentile(by_scene["noisy"].width, 0.5));
+  CHECK(clean < percentile(by_scene["low contrast"].width, 0.5));
+  CHECK(clean < percentile(by_scene["harsh"].width, 0.5));
+}
