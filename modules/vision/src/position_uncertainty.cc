@@ -67,11 +67,20 @@ LineEvidence read_line(const cv::Mat& green, const BoardFrame& board, int row, d
   if (rows < 3 || !std::isfinite(centre_px)) return e;
   // Profiles: rows x columns of the rectified frame around the line.
   std::vector<double> p(static_cast<size_t>(rows * n));
-  for (int r = 0; r < rows; ++r) {
-    for (int k = 0; k < n; ++k) {
-      const double v = sample(green, board.to_camera({static_cast<double>(c - radius + k), static_cast<double>(y0 + r)}));
-      if (!std::isfinite(v)) return e;
-      p[static_cast<size_t>(r * n + k)] = v;
+  if (board.identity()) {
+    // Rectified pixels are camera pixels: read them directly (most of the cost otherwise).
+    if (c - radius < 0 || c + radius >= green.cols || y0 < 0 || y0 + rows > green.rows) return e;
+    for (int r = 0; r < rows; ++r) {
+      const uint8_t* row_px = green.ptr<uint8_t>(y0 + r) + (c - radius);
+      for (int k = 0; k < n; ++k) p[static_cast<size_t>(r * n + k)] = row_px[k];
+    }
+  } else {
+    for (int r = 0; r < rows; ++r) {
+      for (int k = 0; k < n; ++k) {
+        const double v = sample(green, board.to_camera({static_cast<double>(c - radius + k), static_cast<double>(y0 + r)}));
+        if (!std::isfinite(v)) return e;
+        p[static_cast<size_t>(r * n + k)] = v;
+      }
     }
   }
   // Band-averaged profile and its background: a straight line through the two outermost samples on each side
