@@ -2,7 +2,9 @@
 // on a clock that moves only when the test steps it, so every moment is exact: a round starts the
 // instant the hold is over, ends exactly at its duration, a node built again on the same round book
 // (a restart) runs the same round on, stale inputs turn the heartbeat and the drawn blocks, and bad
-// configurations are refused; the keys (S, R, H, P, Q) as SDL delivers them.
+// configurations are refused; the keys (S, R, H, C, D, P, Q) as SDL delivers them; the display condition
+// from the flag, SET_CONDITION, key C and a study session, carried by every round_t; the study session's
+// instruction shown while its driver is heard.
 #include <catch2/catch.hpp>
 
 #include <opencv2/imgcodecs.hpp>
@@ -17,6 +19,8 @@
 #include "bricklayer/projection/projection_node.h"
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/round_t.hpp"
+#include "bricklayer/study_command_t.hpp"
+#include "bricklayer/study_session_t.hpp"
 #include "harness/rig.h"
 #include "harness/scratch.h"
 
@@ -276,4 +280,181 @@ TEST_CASE("the projection's configuration is checked before anything opens") {
   c = quick_config("");
   c.state_width = 2000;
   CHECK_THROWS_AS(rig.add<ProjectionNode>(c), std::invalid_argument);
+  c = quick_config("");
+  c.condition = "green";
+  CHECK_THROWS_AS(rig.add<ProjectionNode>(c), std::invalid_argument);
+}
+
+namespace {
+
+void press(harness::Rig& rig, SDL_Keycode key) {
+  SDL_Event e{};
+  e.type = SDL_KEYDOWN;
+  e.key.keysym.sym = key;
+  REQUIRE(SDL_PushEvent(&e) == 1);
+  rig.step();
+}
+
+void set_condition(harness::Rig& rig, int32_t index) {
+  command_t c{};
+  c.utime = rig.now();
+  c.command = command_t::SET_CONDITION;
+  c.index = index;
+  rig.publish(channel(kCommandChannel), c);
+}
+
+// The newest projector image and the colour (BGR) at a board point, in its 256-pixel-wide state image.
+cv::Vec3b drawn_at(harness::Recorder& rec, double x, double y) {
+  const auto states = rec.all<projector_state_t>(channel(kProjectorChannel));
+  REQUIRE_FALSE(states.empty());
+  const cv::Mat image = cv::imdecode(states.back().image.data, cv::IMREAD_COLOR);
+  REQUIRE(image.cols == 256);
+  const board::Point2 p = board::BoardToProjector{}.map(x, y);
+  return image.at<cv::Vec3b>(static_cast<int>(p.y / 4), static_cast<int>(p.x / 4));
+}
+
+bool red(const cv::Vec3b& px) { return px[2] > 150 && px[0] == 0 && px[1] == 0; }
+bool blue(const cv::Vec3b& px) { return px[0] > 150 && px[2] == 0 && px[1] == 0; }
+
+}  // namespace
+
+TEST_CASE("on the rig the display condition comes from the flag, SET_CONDITION and key C, and every round_t carries it") {
+  harness::Rig rig(kStepUs);
+  ProjectionConfig config = quick_config("");
+  config.condition = "blue";
+  auto& node = rig.add<ProjectionNode>(config);
+  auto& rec = rig.record({channel(kRoundChannel), channel(kProjectorChannel), channel(kHeartbeatChannel)});
+  Camera cam{rig};
+  cam.pile = true;
+  cam.balanced = false;  // block 2 (row 1, x -0.7) is the cause, block 1 (row 0, x -0.8) stands on the surface
+  auto bottom = [&rec] { return drawn_at(rec, -0.8 + 0.5, 0.5 / 3.0); };
+  auto top = [&rec] { return drawn_at(rec, -0.7 + 0.5, 1.5 / 3.0); };
+  cam.run(1 * kS);
+  CHECK(node.condition() == DisplayCondition::kBlue);
+  const auto rounds = rec.all<round_t>(channel(kRoundChannel));
+  REQUIRE(rounds.size() >= 1);
+  for (const round_t& r : rounds) CHECK(r.condition == study_session_t::CONDITION_BLUE);
+  INFO("blue: the cause " << top() << ", the other " << bottom());
+  CHECK(blue(top()));  // a falling pile, yet no red
+  CHECK(blue(bottom()));
+  const auto hb = rec.wait_for_heartbeat("projection", {}, 0ms);
+  REQUIRE(hb);
+  const auto named = std::find(hb->value_names.begin(), hb->value_names.end(), "condition");
+  REQUIRE(named != hb->value_names.end());
+  CHECK(hb->values[named - hb->value_names.begin()] == study_session_t::CONDITION_BLUE);
+
+  // The study driver's command: red from the next round_t on, sent at once (not at the next second).
+  rec.clear();
+  const int64_t sent = rig.now();
+  set_condition(rig, study_session_t::CONDITION_RED);
+  cam.run(1 * kS);
+  CHECK(node.condition() == DisplayCondition::kRed);
+  const auto red_round = rec.wait_for<round_t>(channel(kRoundChannel), {}, 0ms);
+  REQUIRE(red_round);
+  CHECK(red_round->condition == study_session_t::CONDITION_RED);
+  CHECK(red_round->utime <= sent + kStepUs);
+  INFO("red: the cause " << top() << ", the other " << bottom());
+  CHECK(red(top()));
+  CHECK(red(bottom()));  // the whole pile while it falls
+
+  // Bad indices: counted errors, the condition stays, the node goes on.
+  const int64_t errors = node.counters().errors;
+  for (int32_t bad : {0, 4, -3, 1 << 20}) set_condition(rig, bad);
+  rec.clear();
+  cam.run(1 * kS);
+  CHECK(node.counters().errors == errors + 4);
+  CHECK(node.condition() == DisplayCondition::kRed);
+  const auto still = rec.all<round_t>(channel(kRoundChannel));
+  REQUIRE_FALSE(still.empty());
+  CHECK(still.back().condition == study_session_t::CONDITION_RED);
+
+  // Key C: the next condition, proposed (only the cause red), then blue again.
+  rec.clear();
+  press(rig, SDLK_c);
+  cam.run(1 * kS);
+  CHECK(node.condition() == DisplayCondition::kProposed);
+  CHECK(rec.all<round_t>(channel(kRoundChannel)).front().condition == study_session_t::CONDITION_PROPOSED);
+  INFO("proposed: the cause " << top() << ", the other " << bottom());
+  CHECK(red(top()));
+  CHECK(blue(bottom()));
+  press(rig, SDLK_c);
+  CHECK(node.condition() == DisplayCondition::kBlue);
+
+  // Under red the pile turns blue again once it stands.
+  set_condition(rig, study_session_t::CONDITION_RED);
+  cam.run(1 * kS);
+  CHECK(red(bottom()));
+  cam.balanced = true;
+  cam.run(1 * kS);
+  INFO("red, standing: the top " << top() << ", the bottom " << bottom());
+  CHECK(blue(top()));
+  CHECK(blue(bottom()));
+}
+
+TEST_CASE("on the rig a study session's instruction is shown while its driver is heard, and key D says done") {
+  harness::Rig rig(kStepUs);
+  ProjectionConfig config = quick_config("");
+  config.stale_seconds = 0;  // an empty board without a camera: nothing else changes on the display
+  auto& node = rig.add<ProjectionNode>(config);
+  auto& rec = rig.record({channel(kProjectorChannel), channel(kStudyCommandChannel)});
+  auto image = [&rec] {
+    const auto states = rec.all<projector_state_t>(channel(kProjectorChannel));
+    REQUIRE_FALSE(states.empty());
+    return cv::imdecode(states.back().image.data, cv::IMREAD_COLOR);
+  };
+  rig.run_for(500ms);
+  const cv::Mat before = image();
+  CHECK(node.instruction().empty());
+
+  study_session_t s{};
+  s.session_id = "s07";
+  s.subject_id = "p07";
+  s.condition = study_session_t::CONDITION_RED;
+  s.step = study_session_t::STEP_PROBLEM_1;
+  s.state = study_session_t::STATE_RUNNING;
+  s.instruction = "Add as few blocks as you can so that it stands. Say done when you are finished.";
+  int64_t last_sent = 0;
+  auto driver = [&](int seconds) {  // the driver's once-a-second state
+    for (int k = 0; k < seconds; ++k) {
+      s.utime = last_sent = rig.now();
+      rig.publish(channel(kStudySessionChannel), s);
+      rig.run_for(1s);
+    }
+  };
+  driver(1);
+  CHECK(node.instruction() == s.instruction);
+  const cv::Mat shown = image();
+  CHECK(cv::norm(before, shown, cv::NORM_L1) > 1000);  // the words are on the display
+  cv::Mat green;
+  cv::extractChannel(shown, green, 1);
+  CHECK(cv::countNonZero(green) == 0);
+  // Its condition is taken when first heard (a projection restarted mid-session shows the right one)...
+  CHECK(node.condition() == DisplayCondition::kRed);
+  // ...but not every second: a command wins until the session's condition changes.
+  set_condition(rig, study_session_t::CONDITION_PROPOSED);
+  driver(2);
+  CHECK(node.condition() == DisplayCondition::kProposed);
+  s.condition = study_session_t::CONDITION_BLUE;
+  driver(1);
+  CHECK(node.condition() == DisplayCondition::kBlue);
+
+  // The subject says done at the board: DONE for this session, a new sequence each time.
+  press(rig, SDLK_d);
+  press(rig, SDLK_d);
+  const auto done = rec.all<study_command_t>(channel(kStudyCommandChannel));
+  REQUIRE(done.size() == 2);
+  CHECK(done[0].command == study_command_t::DONE);
+  CHECK(done[0].session_id == "s07");
+  CHECK(done[1].sequence > done[0].sequence);
+
+  // The driver gone quiet: the words go once three of its seconds are missed, not before.
+  rig.run_until([&] { return node.instruction().empty(); }, 5s);
+  CHECK(node.instruction().empty());
+  CHECK(rig.now() == last_sent + ProjectionNode::kStudySessionHeardUs + kStepUs);  // the first step past 3 s
+  rig.run_for(500ms);
+  CHECK(cv::norm(before, image(), cv::NORM_L1) == 0);
+  press(rig, SDLK_d);  // no session heard: for whichever session runs
+  const auto any = rec.all<study_command_t>(channel(kStudyCommandChannel));
+  REQUIRE(any.size() == 3);
+  CHECK(any[2].session_id.empty());
 }

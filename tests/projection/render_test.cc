@@ -392,3 +392,159 @@ TEST_CASE("a knife edge: the deciding block blue inside with a red outline, the 
   const cv::Vec3b px = plain.at<cv::Vec3b>(static_cast<int>(std::lround(edge.y)) - 2, static_cast<int>(std::lround(edge.x)));
   CHECK(px[2] == 0);
 }
+
+namespace {
+
+// Pixels lit red with no blue at all: only a red block (or outline) is drawn so; text and ghosts mix both.
+int pure_red_pixels(const cv::Mat& frame) {
+  cv::Mat mask;
+  cv::inRange(frame, cv::Vec3b(0, 0, 1), cv::Vec3b(0, 0, 255), mask);
+  return cv::countNonZero(mask);
+}
+
+int count_colour(const cv::Mat& image, Rgb c) {
+  cv::Mat mask;
+  cv::inRange(image, bgr(c), bgr(c), mask);
+  return cv::countNonZero(mask);
+}
+
+collapse_preview_t falling_preview(int64_t frame) {
+  collapse_preview_t preview{};
+  preview.frame_number = frame;
+  preview.num_blocks = 3;
+  preview.block_ids = {1, 2, 3};
+  preview.end_state = {collapse_preview_t::END_UNTOUCHED, collapse_preview_t::END_AT_REST,
+                       collapse_preview_t::END_FELL_OFF};
+  preview.num_frames = 2;
+  preview.time_s = {0.0, 0.4};
+  preview.num_values = 18;
+  preview.poses = {0.2, 1 / 6.0, 0, 0.8, 0.5, 0, 1.4, 5 / 6.0, 0,
+                   0.2, 1 / 6.0, 0, 0.9, 0.3, -0.3, 1.6, 0.2, -0.9};
+  return preview;
+}
+
+}  // namespace
+
+TEST_CASE("each display condition lights a falling pile as the study says, on the board and in the miniature") {
+  Fixture f;
+  Scene scene;
+  scene.set_stack(make_stack(7, {{1, 0, -0.3}, {2, 1, 0.3}, {3, 2, 0.9}}));
+  scene.set_prediction(make_prediction(7, {{1, block_prediction_t::STATE_STABLE},
+                                          {2, block_prediction_t::STATE_MOVING},
+                                          {3, block_prediction_t::STATE_CAUSE}}));
+  scene.set_preview(falling_preview(7));
+  board::BoardToProjector mapping;
+  const auto& blocks = scene.blocks();
+  struct Expect {
+    DisplayCondition condition;
+    Rgb fill[3];
+    bool ghost;
+  };
+  for (const Expect& e : {Expect{DisplayCondition::kBlue, {kStableBlue, kStableBlue, kStableBlue}, false},
+                          Expect{DisplayCondition::kRed, {kCauseRed, kCauseRed, kCauseRed}, false},
+                          Expect{DisplayCondition::kProposed, {kStableBlue, kMovingMagenta, kCauseRed}, true}}) {
+    INFO("condition " << condition_name(e.condition));
+    Hud hud = hud_for(scene);
+    hud.condition = e.condition;
+    const cv::Mat frame = f.draw(scene, mapping, hud, 250);
+    save_for_review(frame, std::string("condition-") + condition_name(e.condition) + "-falling.png");
+    for (int k = 0; k < 3; ++k) check_block_colour(frame, mapping, blocks[k], e.fill[k]);
+    const SDL_Rect box = f.renderer.layout().minimap;
+    const cv::Mat mini = frame(cv::Rect(box.x, box.y, box.w, box.h));
+    // The miniature tells the same: its blocks in the same colours, the ghost only under proposed.
+    CHECK((count_colour(mini, kCauseRed) > 50) == (e.condition != DisplayCondition::kBlue));
+    CHECK((count_colour(mini, kStableBlue) > 50) == (e.condition != DisplayCondition::kRed));
+    CHECK((count_colour(mini, kMovingMagenta) > 50) == (e.condition == DisplayCondition::kProposed));
+    CHECK((count_colour(mini, kGhost) > 20) == e.ghost);
+    if (e.condition == DisplayCondition::kBlue) CHECK(pure_red_pixels(frame) == 0);  // no red anywhere
+    CHECK(green_pixels(frame) == 0);
+  }
+}
+
+TEST_CASE("a standing pile is all blue under every display condition") {
+  Fixture f;
+  Scene scene;
+  scene.set_stack(make_stack(8, {{1, 0, -0.6}, {2, 1, -0.3}, {3, 2, -0.1}}));
+  scene.set_prediction(make_prediction(8, {{1, block_prediction_t::STATE_STABLE},
+                                          {2, block_prediction_t::STATE_STABLE},
+                                          {3, block_prediction_t::STATE_STABLE}}));
+  board::BoardToProjector mapping;
+  for (auto c : {DisplayCondition::kBlue, DisplayCondition::kRed, DisplayCondition::kProposed}) {
+    INFO("condition " << condition_name(c));
+    Hud hud = hud_for(scene);
+    hud.condition = c;
+    const cv::Mat frame = f.draw(scene, mapping, hud);
+    save_for_review(frame, std::string("condition-") + condition_name(c) + "-standing.png");
+    for (const SceneBlock& b : scene.blocks()) check_block_colour(frame, mapping, b, kStableBlue);
+    CHECK(pure_red_pixels(frame) == 0);
+    CHECK(green_pixels(frame) == 0);
+  }
+}
+
+TEST_CASE("a knife edge under red and blue: all blue, no outline, no margin text") {
+  Fixture f;
+  Scene scene;
+  scene.set_stack(make_stack(5, {{1, 0, -0.6}, {2, 1, -0.1}}));
+  prediction_t p = make_prediction(5, {{1, block_prediction_t::STATE_STABLE}, {2, block_prediction_t::STATE_STABLE}});
+  p.verdict = prediction_t::VERDICT_KNIFE_EDGE;
+  p.raw_verdict = prediction_t::VERDICT_KNIFE_EDGE;
+  p.margin = -0.004;
+  p.margin_mm = -0.3;
+  p.uncertainty = 0.003;
+  p.blocks[1].deciding = true;
+  scene.set_prediction(p);
+  board::BoardToProjector mapping;
+  for (auto c : {DisplayCondition::kBlue, DisplayCondition::kRed, DisplayCondition::kProposed}) {
+    INFO("condition " << condition_name(c));
+    Hud hud = hud_for(scene);
+    hud.condition = c;
+    const cv::Mat frame = f.draw(scene, mapping, hud, 800);  // the pulse at its brightest
+    for (const SceneBlock& b : scene.blocks()) check_block_colour(frame, mapping, b, kStableBlue);
+    const bool proposed = c == DisplayCondition::kProposed;
+    CHECK((pure_red_pixels(frame) > 0) == proposed);  // the outline
+    CHECK((f.renderer.layout().margin.w > 0) == proposed);
+    CHECK(green_pixels(frame) == 0);
+  }
+}
+
+TEST_CASE("a study session's instruction is drawn wrapped below the top's texts, covering none of them") {
+  Fixture f;
+  Scene scene;
+  scene.set_stack(make_stack(2, {{1, 0, -0.5}}));
+  prediction_t p = make_prediction(2, {{1, block_prediction_t::STATE_STABLE}});
+  p.uncertainty = 0.003;  // judged with an uncertainty: the margin line under the miniature is drawn
+  p.margin_mm = 2.0;
+  scene.set_prediction(p);
+  board::BoardToProjector mapping;
+  Hud hud = hud_for(scene);
+  hud.day_best = 230;
+  hud.rounds_today = 3;  // the score column at its longest
+  const cv::Mat without = f.draw(scene, mapping, hud);
+  CHECK(f.renderer.layout().instruction.w == 0);
+  hud.instruction =
+      "Build the pile shown by the outlines. It falls. Add as few blocks as you can so that it stands, without "
+      "moving the blocks shown. Say done when you are finished.";
+  const cv::Mat with = f.draw(scene, mapping, hud);
+  save_for_review(with, "instruction.png");
+  const Layout layout = f.renderer.layout();
+  const SDL_Rect r = layout.instruction;
+  CHECK(lit_pixels(with, r) > 2000);
+  CHECK(lit_pixels(without, r) < lit_pixels(with, r));
+  // Wrapped into several lines of the small font ("SCORE" is one such line), none wider than 60 % of the image.
+  REQUIRE(layout.score_label.h > 0);
+  CHECK(r.h >= 3 * layout.score_label.h);
+  CHECK(r.w <= 1024 * 60 / 100);
+  CHECK(std::abs(r.x + r.w / 2 - 512) < 10);
+  REQUIRE(layout.margin.w > 0);
+  REQUIRE(layout.day_best.w > 0);
+  int k = 0;
+  for (const SDL_Rect& other : {layout.minimap, layout.margin, layout.timer, layout.score, layout.score_label, layout.max,
+                                layout.best, layout.day_best}) {
+    INFO("layout rectangle " << k++);
+    CHECK_FALSE(SDL_HasIntersection(&r, &other));
+  }
+  const board::Point2 block_top = mapping.map(-0.5, 1.0 / 3.0);
+  CHECK(r.y + r.h < block_top.y);  // above the pile
+  check_block_colour(with, mapping, scene.blocks()[0], kStableBlue);  // the pile is still drawn
+  CHECK(green_pixels(with) == 0);
+}

@@ -54,13 +54,22 @@ GameRenderer::~GameRenderer() {
 }
 
 SDL_Rect GameRenderer::draw_text(Slot slot, TTF_Font* font, const std::string& text, Rgb colour, int x, int y,
-                                 int align) {
+                                 int align, int wrap) {
   Text& t = texts_[slot];
   if (!t.texture || t.text != text || t.colour.r != colour.r || t.colour.b != colour.b) {
     if (t.texture) SDL_DestroyTexture(t.texture);
     t = Text{text, colour, nullptr, 0, 0};
     if (text.empty()) return SDL_Rect{};
-    SDL_Surface* surface = TTF_RenderUTF8_Blended(font, text.c_str(), sdl_colour(colour));
+    SDL_Surface* surface = nullptr;
+    if (wrap > 0) {
+      // The fonts are shared by every slot: the alignment is set for this text and put back.
+      TTF_SetFontWrappedAlign(font, align == 1 ? TTF_WRAPPED_ALIGN_CENTER : align == 2 ? TTF_WRAPPED_ALIGN_RIGHT
+                                                                                      : TTF_WRAPPED_ALIGN_LEFT);
+      surface = TTF_RenderUTF8_Blended_Wrapped(font, text.c_str(), sdl_colour(colour), static_cast<Uint32>(wrap));
+      TTF_SetFontWrappedAlign(font, TTF_WRAPPED_ALIGN_LEFT);
+    } else {
+      surface = TTF_RenderUTF8_Blended(font, text.c_str(), sdl_colour(colour));
+    }
     if (!surface) return SDL_Rect{};
     t.texture = SDL_CreateTextureFromSurface(renderer_, surface);
     t.w = surface->w;
@@ -96,14 +105,33 @@ void GameRenderer::outline(const SDL_FPoint* points, int count, Rgb colour) {
 void GameRenderer::draw_game(const Scene& scene, const board::BoardToProjector& mapping, const Hud& hud, int64_t anim_ms) {
   SDL_SetRenderDrawBlendMode(renderer_, SDL_BLENDMODE_NONE);
   const bool stale = !hud.notice.empty();
-  draw_blocks(scene, mapping, stale, anim_ms);
-  draw_minimap(scene, anim_ms, stale);
+  // One decision for the board and the miniature (stale: every flag off, every block dim).
+  const PileLook look = pile_look(hud.condition, scene, stale);
+  draw_blocks(scene, mapping, look, anim_ms);
+  draw_minimap(scene, look, anim_ms, stale);
   draw_hud(hud);
-  draw_margin(scene, anim_ms, stale);
+  draw_margin(scene, look, anim_ms);
+  draw_instruction(hud);
 }
 
-void GameRenderer::draw_margin(const Scene& scene, int64_t anim_ms, bool stale) {
-  const KnifeEdgeLook look = knife_edge_look(stale ? nullptr : scene.prediction_for_stack(), anim_ms);
+void GameRenderer::draw_instruction(const Hud& hud) {
+  if (hud.instruction.empty()) {
+    layout_.instruction = SDL_Rect{};
+    return;
+  }
+  // Below everything at the top (the miniature and its margin line, the timer's lines, the score column),
+  // centred and wrapped, so it covers no number and the pile, which rises from the bottom, stays in view.
+  const int margin = std::max(4, height_ / 48);
+  int top = layout_.minimap.y + layout_.minimap.h + margin / 2 + TTF_FontLineSkip(font_small_);
+  for (const SDL_Rect& r : {layout_.margin, layout_.timer, layout_.round_label, layout_.score, layout_.max, layout_.best,
+                            layout_.day_best})
+    if (r.w > 0) top = std::max(top, r.y + r.h);
+  layout_.instruction =
+      draw_text(kInstruction, font_small_, hud.instruction, kText, width_ / 2, top + margin / 2, 1, width_ * 60 / 100);
+}
+
+void GameRenderer::draw_margin(const Scene& scene, const PileLook& pile, int64_t anim_ms) {
+  const KnifeEdgeLook look = knife_edge_look(pile.margin_text ? scene.prediction_for_stack() : nullptr, anim_ms);
   const int margin = std::max(4, height_ / 48);
   // Under the miniature, which shows the same pile.
   layout_.margin = draw_text(kMargin, font_small_, look.margin_text, look.knife_edge ? kTextWarning : kTextDim,
@@ -131,13 +159,16 @@ void GameRenderer::outline_blocks(const KnifeEdgeLook& look, const Scene& scene,
   }
 }
 
-void GameRenderer::draw_blocks(const Scene& scene, const board::BoardToProjector& mapping, bool stale, int64_t anim_ms) {
-  for (const SceneBlock& b : scene.blocks()) {
+void GameRenderer::draw_blocks(const Scene& scene, const board::BoardToProjector& mapping, const PileLook& pile,
+                               int64_t anim_ms) {
+  const auto& blocks = scene.blocks();
+  for (size_t k = 0; k < blocks.size(); ++k) {
+    const SceneBlock& b = blocks[k];
     fill_quad({to_sdl(mapping.map(b.x, b.y)), to_sdl(mapping.map(b.x + 1, b.y)),
                to_sdl(mapping.map(b.x + 1, b.y + b.height)), to_sdl(mapping.map(b.x, b.y + b.height))},
-              colour_for(stale ? BlockState::kUnknown : b.state));
+              pile.fill[k]);
   }
-  const KnifeEdgeLook look = knife_edge_look(stale ? nullptr : scene.prediction_for_stack(), anim_ms);
+  const KnifeEdgeLook look = knife_edge_look(pile.knife_edge ? scene.prediction_for_stack() : nullptr, anim_ms);
   outline_blocks(look, scene, [&](double x, double y) { return to_sdl(mapping.map(x, y)); }, std::max(2, height_ / 150));
 }
 
@@ -199,12 +230,12 @@ std::string round_label(const Hud& hud) {
   return hud.auto_start ? over + " - clear the board to play again" : over;
 }
 
-void GameRenderer::draw_minimap(const Scene& scene, int64_t anim_ms, bool stale) {
+void GameRenderer::draw_minimap(const Scene& scene, const PileLook& look, int64_t anim_ms, bool stale) {
   const int margin = std::max(4, height_ / 48);
   const SDL_Rect box{margin, margin, width_ * 28 / 100, height_ * 24 / 100};
   layout_.minimap = box;
   const double h = scene.block_height();
-  const collapse_preview_t* preview = stale ? nullptr : scene.preview_for_stack();
+  const collapse_preview_t* preview = look.ghost ? scene.preview_for_stack() : nullptr;
   const hint_t* hint = stale ? nullptr : scene.hint();
 
   // Fit the pile (and the hint) with the surface edge in view.
@@ -235,10 +266,12 @@ void GameRenderer::draw_minimap(const Scene& scene, int64_t anim_ms, bool stale)
                                {float(box.x), float(box.y + box.h - 1)}, {float(box.x), float(box.y)}};
   outline(frame, 5, kSurface);
   fill_quad({at(xmin, ymin), at(0, ymin), at(0, 0), at(xmin, 0)}, kSurface);
-  for (const SceneBlock& b : scene.blocks())
-    fill_quad({at(b.x, b.y), at(b.x + 1, b.y), at(b.x + 1, b.y + b.height), at(b.x, b.y + b.height)},
-              colour_for(stale ? BlockState::kUnknown : b.state));
-  outline_blocks(knife_edge_look(stale ? nullptr : scene.prediction_for_stack(), anim_ms), scene, at, 2);
+  const auto& blocks = scene.blocks();
+  for (size_t k = 0; k < blocks.size(); ++k) {
+    const SceneBlock& b = blocks[k];
+    fill_quad({at(b.x, b.y), at(b.x + 1, b.y), at(b.x + 1, b.y + b.height), at(b.x, b.y + b.height)}, look.fill[k]);
+  }
+  outline_blocks(knife_edge_look(look.knife_edge ? scene.prediction_for_stack() : nullptr, anim_ms), scene, at, 2);
 
   // The collapse preview: the key frames played back in simulated time (linear between them), looped
   // with a pause at the end, drawn as outlines over the pile.

@@ -15,6 +15,7 @@
 #include "bricklayer/projection/round_book.h"
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/round_t.hpp"
+#include "bricklayer/study_command_t.hpp"
 
 #ifndef BRICKLAYER_DEFAULT_BEST_OVERHANG
 #define BRICKLAYER_DEFAULT_BEST_OVERHANG ""
@@ -101,6 +102,7 @@ ProjectionNode::ProjectionNode(const Config& config, runtime::Bus& bus)
       round_channel_(channel(kRoundChannel)),
       projector_channel_(channel(kProjectorChannel)),
       timing_channel_(channel(kTimingChannel)),
+      study_command_channel_(channel(kStudyCommandChannel)),
       round_(round_rules(config)),
       watch_(now(), static_cast<int64_t>(config.stale_seconds * 1e6)),
       debounce_(300, 1000),
@@ -119,6 +121,8 @@ ProjectionNode::ProjectionNode(const Config& config, runtime::Bus& bus)
     }
   }
   restore_rounds();
+  // runtime::validate has checked the name against the same three.
+  condition_ = condition_from_name(config.condition).value_or(DisplayCondition::kProposed);
 
   display_ = std::make_unique<Display>(display_options(config));
   renderer_ = std::make_unique<GameRenderer>(display_->renderer(), config.width, config.height, config.font);
@@ -145,6 +149,8 @@ ProjectionNode::ProjectionNode(const Config& config, runtime::Bus& bus)
       error("rejected previews", std::string("collapse preview rejected: ") + e.what());
     }
   });
+  subscribe<study_session_t>(channel(kStudySessionChannel), QueuePolicy::newest(),
+                             [this](const study_session_t& s) { on_study_session(s); });
   // Every command counts (no newest-wins); a flood keeps the newest thousand.
   subscribe<command_t>(command_channel_, QueuePolicy::keep(1000), [this](const command_t& c) { apply_command(c); });
 
@@ -264,6 +270,44 @@ void ProjectionNode::on_calibration(const calibration_t& c) {
   }
 }
 
+void ProjectionNode::set_condition(DisplayCondition condition, const std::string& by) {
+  if (condition == condition_) return;
+  log::info("display condition ", condition_name(condition), " (was ", condition_name(condition_), "; ", by, ")");
+  condition_ = condition;
+  dirty_ = true;
+  next_round_publish_utime_ = now();  // the next round_t says so at once
+}
+
+void ProjectionNode::on_study_session(const study_session_t& s) {
+  study_session_ = s;
+  study_session_utime_ = now();
+  // The driver sends SET_CONDITION only before its games, so a projection restarted mid-session would
+  // show the default to the subject: a session's condition is taken when first heard and when it changes
+  // (not every second, so key C or a command still wins until the session's condition changes).
+  if (auto c = condition_from_index(s.condition); c && study_condition_ != s.condition) {
+    study_condition_ = s.condition;
+    set_condition(*c, "study session " + s.session_id);
+  }
+}
+
+std::string ProjectionNode::instruction() const {
+  if (!study_session_ || now() - study_session_utime_ > kStudySessionHeardUs) return "";
+  return study_session_->instruction;
+}
+
+void ProjectionNode::send_done() {
+  study_command_t c{};
+  c.utime = now();
+  // The session heard (if any); "" = whichever session is running.
+  if (study_session_ && now() - study_session_utime_ <= kStudySessionHeardUs) c.session_id = study_session_->session_id;
+  c.command = study_command_t::DONE;
+  // Unique across senders, as bricklayer-study send does (the driver ignores a repeat of one sequence).
+  study_command_sequence_ = std::max(study_command_sequence_ + 1, c.utime);
+  c.sequence = study_command_sequence_;
+  publish(study_command_channel_, c);
+  log::info("study: done (key D)");
+}
+
 void ProjectionNode::apply_command(const command_t& c) {
   switch (c.command) {
     case command_t::START_ROUND: round_.start(now()); dirty_ = true; break;
@@ -285,6 +329,15 @@ void ProjectionNode::apply_command(const command_t& c) {
       break;
     case command_t::CLEAR_HINT: scene_.clear_hint(); dirty_ = true; break;
     case command_t::SNAPSHOT: snapshot_requested_ = true; break;
+    case command_t::SET_CONDITION:
+      if (const auto condition = condition_from_index(c.index)) {
+        set_condition(*condition, "command SET_CONDITION");
+      } else {
+        error("bad display conditions", "SET_CONDITION index " + std::to_string(c.index) +
+                                            " is not 1 (blue), 2 (red) or 3 (proposed); the condition stays " +
+                                            condition_name(condition_));
+      }
+      break;
     default: break;  // REQUEST_HINT, SELF_CHECK, ...: for other modules
   }
 }
@@ -301,6 +354,8 @@ void ProjectionNode::handle_events() {
       case SDLK_s: round_.start(now()); dirty_ = true; break;
       case SDLK_r: round_.reset(now()); dirty_ = true; break;
       case SDLK_h: request_hint(); break;
+      case SDLK_c: set_condition(next_condition(condition_), "key C"); break;
+      case SDLK_d: send_done(); break;
       case SDLK_p: snapshot_requested_ = true; break;
       default: break;
     }
@@ -319,7 +374,10 @@ void ProjectionNode::request_hint() {
 void ProjectionNode::tick() {
   handle_events();
   advance_round();
-  const bool animating = !pattern_ && scene_.preview_for_stack() != nullptr;
+  // A new instruction, or none once the driver has gone quiet.
+  if (instruction() != drawn_instruction_) dirty_ = true;
+  // The ghost moves only where it is drawn (proposed).
+  const bool animating = !pattern_ && condition_ == DisplayCondition::kProposed && scene_.preview_for_stack() != nullptr;
   const bool refresh = display_->mode() != DisplayMode::kHeadless;  // a real screen redraws every refresh
   if ((dirty_ || animating || refresh) && !awaiting_prediction()) draw_and_present();
   capture_if_due();
@@ -345,7 +403,9 @@ void ProjectionNode::advance_round() {
     publish_round();
     next_round_publish_utime_ = t + 1'000'000;
   }
-  if (debounce_.update(!pattern_ && problem == InputProblem::kNone && scene_.any_cause(), t / 1000) && beeper_)
+  // The beep follows what is shown: never under the blue condition.
+  const bool alarm = pile_look(condition_, scene_, problem != InputProblem::kNone).alarm;
+  if (debounce_.update(!pattern_ && alarm, t / 1000) && beeper_)
     beeper_->beep();
 }
 
@@ -360,6 +420,7 @@ void ProjectionNode::before_heartbeat() {
   set_value("calibrated", mapping_.calibrated() ? 1 : 0);
   set_value("day_best", round_.day_best(t));
   set_value("rounds_today", round_.rounds_today(t));
+  set_value("condition", static_cast<int>(condition_));
   const std::string stale = watch_.status(t);
   set_status(pattern_ ? "pattern" : stale.empty() ? "ok" : stale);
 }
@@ -374,10 +435,12 @@ void ProjectionNode::publish_round() {
   r.max_score = round_.max_score();
   r.num_blocks = static_cast<int32_t>(scene_.blocks().size());
   r.best_possible = best_overhang_.best_for(r.num_blocks).value_or(0.0);
+  r.condition = static_cast<int8_t>(condition_);
   publish(round_channel_, r);
 }
 
 void ProjectionNode::draw_and_present() {
+  drawn_instruction_ = instruction();
   display_->begin_frame();
   if (pattern_) {
     renderer_->draw_pattern(*pattern_);
@@ -397,6 +460,8 @@ void ProjectionNode::draw_and_present() {
     hud.overhang = scene_.overhang();
     hud.best_overhang = best_overhang_.best_for(hud.num_blocks);
     hud.best_known_up_to = best_overhang_.largest();
+    hud.condition = condition_;
+    hud.instruction = drawn_instruction_;
     renderer_->draw_game(scene_, mapping_, hud, (t - start_utime_) / 1000);
   }
   display_->present();

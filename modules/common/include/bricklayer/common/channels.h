@@ -20,6 +20,10 @@ inline constexpr const char* kPreviewChannel = "BL_PREVIEW";        // collapse_
 inline constexpr const char* kHintChannel = "BL_HINT";              // hint_t, planner
 inline constexpr const char* kTruthChannel = "BL_TRUTH";            // stack_t, simcam: the true stack of each frame
 inline constexpr const char* kConfigChannel = "BL_CONFIG";          // node_config_t, every node at start and every 10 s
+// The study session's (modules/study) that a stage reads or writes: projection shows the session's
+// instruction and sends the subject's "done". The other study channels are in bricklayer/study/channels.h.
+inline constexpr const char* kStudySessionChannel = "BL_STUDY_SESSION";  // study_session_t, session driver
+inline constexpr const char* kStudyCommandChannel = "BL_STUDY_COMMAND";  // study_command_t, experimenter/projection -> driver
 
 // The channel name with the deployment's prefix (environment BRICKLAYER_CHANNEL_PREFIX, default none).
 std::string channel(const char* name);

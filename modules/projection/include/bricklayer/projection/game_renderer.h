@@ -2,8 +2,11 @@
 // projector coordinates with its predicted colour; score, MAX and how close the pile is to the best
 // possible top right; the round timer top centre; a miniature of the pile with its prediction, the
 // animated collapse preview and the hint outline top left) or a calibration pattern full screen.
-// While an input is stale (Hud::notice) the blocks lose their verdict colours (dim blue, no ghost,
-// no hint) and the notice is shown in the middle: a frozen red or blue must not pass for the truth.
+// The blocks' colours, the knife-edge outline, the margin text and the ghost follow the display condition
+// (display_condition.h), the same decision on the board and in the miniature. While an input is stale
+// (Hud::notice) the blocks lose their verdict colours (dim blue, no ghost, no hint) and the notice is
+// shown in the middle: a frozen red or blue must not pass for the truth. A study session's instruction
+// (Hud::instruction) is shown centred and wrapped below everything else at the top.
 // Every colour of the game display comes from palette.h: green stays 0 in every pixel.
 #pragma once
 
@@ -19,6 +22,7 @@
 #include <opencv2/core.hpp>
 
 #include "bricklayer/board/board_to_projector.h"
+#include "bricklayer/projection/display_condition.h"
 #include "bricklayer/projection/knife_edge_look.h"
 #include "bricklayer/projection/palette.h"
 #include "bricklayer/projection/round_referee.h"
@@ -43,6 +47,8 @@ struct Hud {
   double overhang = 0;                  // block lengths
   std::optional<double> best_overhang;  // best possible for num_blocks; nothing = no percentage line
   int best_known_up_to = 0;             // the table's largest block count: a larger pile is told so
+  DisplayCondition condition = DisplayCondition::kProposed;  // how the pile is lit
+  std::string instruction;              // a study session's words to the subject; "" = none
 };
 
 // Where the parts of the display were drawn in the last frame (projector pixels). Text rectangles
@@ -58,6 +64,7 @@ struct Layout {
   SDL_Rect margin{};  // the margin text under the miniature (knife_edge_look.h)
   SDL_Rect day_best{};
   SDL_Rect notice{};
+  SDL_Rect instruction{};  // the study session's instruction, all its lines
 };
 
 // The line under the timer: how to start a round, or how the last one ended.
@@ -85,15 +92,17 @@ class GameRenderer {
     int w = 0;
     int h = 0;
   };
-  enum Slot { kScore, kScoreLabel, kMax, kBest, kTimer, kRoundLabel, kDayBest, kNotice, kMargin, kSlotCount };
-  // Draws text with its top edge at y; align: 0 left of x, 1 centred on x, 2 right of x.
-  SDL_Rect draw_text(Slot slot, TTF_Font* font, const std::string& text, Rgb colour, int x, int y, int align);
+  enum Slot { kScore, kScoreLabel, kMax, kBest, kTimer, kRoundLabel, kDayBest, kNotice, kMargin, kInstruction, kSlotCount };
+  // Draws text with its top edge at y; align: 0 left of x, 1 centred on x, 2 right of x. wrap > 0: lines
+  // broken at spaces to at most wrap pixels (centred lines when align is 1).
+  SDL_Rect draw_text(Slot slot, TTF_Font* font, const std::string& text, Rgb colour, int x, int y, int align, int wrap = 0);
   void fill_quad(const std::array<SDL_FPoint, 4>& corners, Rgb colour);
   void outline(const SDL_FPoint* points, int count, Rgb colour);
-  void draw_blocks(const Scene& scene, const board::BoardToProjector& mapping, bool stale, int64_t anim_ms);
+  void draw_blocks(const Scene& scene, const board::BoardToProjector& mapping, const PileLook& look, int64_t anim_ms);
   void draw_hud(const Hud& hud);
-  void draw_minimap(const Scene& scene, int64_t anim_ms, bool stale);
-  void draw_margin(const Scene& scene, int64_t anim_ms, bool stale);  // knife_edge_look.h's text
+  void draw_instruction(const Hud& hud);  // a study session's words, below everything at the top
+  void draw_minimap(const Scene& scene, const PileLook& look, int64_t anim_ms, bool stale);
+  void draw_margin(const Scene& scene, const PileLook& look, int64_t anim_ms);  // knife_edge_look.h's text
   void outline_blocks(const KnifeEdgeLook& look, const Scene& scene, const std::function<SDL_FPoint(double, double)>& at,
                       int width);
 

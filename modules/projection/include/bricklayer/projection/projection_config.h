@@ -36,6 +36,7 @@ struct ProjectionConfig {
   std::string renderer;
   bool no_vsync = false;
   bool mute = false;
+  std::string condition = "proposed";
 
   template <typename Visitor>
   void visit(Visitor& v) {
@@ -76,6 +77,10 @@ struct ProjectionConfig {
     v(runtime::param("renderer", renderer, "SDL render driver for --window/--display (\"\" = SDL's choice, software, opengl, ...)"));
     v(runtime::param("no-vsync", no_vsync, "do not wait for the display's vertical sync"));
     v(runtime::param("mute", mute, "no beep"));
+    v(runtime::param("condition", condition,
+                     "display condition at start (the seed paper's study): blue (always blue), red (all red while the "
+                     "pile falls), proposed (the blocks that start the collapse red); SET_CONDITION and key C change it")
+          .one_of({"blue", "red", "proposed"}));
   }
 };
 

@@ -3,20 +3,24 @@
 // time only from its bus's clock.
 //
 // Subscribes: BL_STACK (stack_t), BL_PREDICTION (prediction_t), BL_CALIBRATION (calibration_t),
-//             BL_HINT (hint_t), BL_PREVIEW (collapse_preview_t): newest wins;
-//             BL_COMMAND (command_t): every command counts (a queue of 1000).
+//             BL_HINT (hint_t), BL_PREVIEW (collapse_preview_t), BL_STUDY_SESSION (study_session_t: its
+//             instruction is shown while the session driver is heard): newest wins;
+//             BL_COMMAND (command_t): every command counts (a queue of 1000); SET_CONDITION sets the
+//             display condition (display_condition.h; a bad index is a counted error).
 // Publishes:  BL_ROUND (round_t) on every change and once a second;
 //             BL_PROJECTOR (projector_state_t) after every presented frame that changed, at most
 //             --state-hz times a second: the presented image as PNG (game display downscaled to
 //             --state-width, patterns at full projector size) and the sequence of the last pattern
 //             command applied;
 //             BL_COMMAND (command_t REQUEST_HINT) when H is pressed;
+//             BL_STUDY_COMMAND (study_command_t DONE) when D is pressed (the subject says "done");
 //             BL_TIMING (timing_t, stage "present"): prediction received -> frame presented (a real
 //             stopwatch: a run-to-run figure);
 //             BL_HEARTBEAT once a second (values frames, present_p50_ms, calibrated, day_best,
-//             rounds_today; status "camera not seeing: no stacks for 7 s" while an input is stale).
+//             rounds_today, condition; status "camera not seeing: no stacks for 7 s" while an input is stale).
 // Rounds run themselves (round_referee.h) and are kept in the round book (round_book.h) when
-// --rounds-file is given. Keys: S start, R reset, H hint, P snapshot, Esc/Q quit.
+// --rounds-file is given; every round_t carries the display condition. Keys: S start, R reset, H hint,
+// C next display condition, D done (study), P snapshot, Esc/Q quit.
 #pragma once
 
 #include <cstdint>
@@ -32,6 +36,7 @@
 #include "bricklayer/command_t.hpp"
 #include "bricklayer/projection/beeper.h"
 #include "bricklayer/projection/best_overhang.h"
+#include "bricklayer/projection/display_condition.h"
 #include "bricklayer/projection/display.h"
 #include "bricklayer/projection/game_renderer.h"
 #include "bricklayer/projection/input_watch.h"
@@ -40,6 +45,7 @@
 #include "bricklayer/projection/round_referee.h"
 #include "bricklayer/projection/scene.h"
 #include "bricklayer/runtime/node.h"
+#include "bricklayer/study_session_t.hpp"
 
 namespace bricklayer::projection {
 
@@ -56,8 +62,10 @@ class ProjectionNode final : public runtime::Node {
       "MAX, round timer and a miniature of the pile, beeps when a red block appears, and shows\n"
       "calibration patterns on command. Rounds start by themselves when blocks appear on an empty board\n"
       "and end after --round-seconds or when the board stays empty; the board says \"camera not seeing\"\n"
-      "or \"waiting for the other machine\" instead of a frozen verdict. Keys: S start, R reset, H hint,\n"
-      "P snapshot, Esc/Q quit.";
+      "or \"waiting for the other machine\" instead of a frozen verdict. Display conditions of the seed paper's\n"
+      "study (--condition, command SET_CONDITION, key C): blue (always blue), red (all red while the pile\n"
+      "falls), proposed (the causes red, the default); a study session's instruction is shown. Keys: S start,\n"
+      "R reset, H hint, C next condition, D done (study), P snapshot, Esc/Q quit.";
 
   // Rules across fields (one display mode, state width within the image, snapshots need a folder).
   static void check(const Config& config);
@@ -77,6 +85,12 @@ class ProjectionNode final : public runtime::Node {
   const std::vector<int64_t>& present_latencies_us() const { return latencies_us_; }
   int64_t frames_presented() const { return frames_presented_; }
   bool pattern_shown() const { return pattern_.has_value(); }
+  DisplayCondition condition() const { return condition_; }
+  // The study session's instruction being shown ("" = none: no session heard for kStudySessionHeardUs).
+  std::string instruction() const;
+  // How long the study session's instruction stays after its driver's last message: the driver publishes
+  // once a second, so three missed messages mean it has gone.
+  static constexpr int64_t kStudySessionHeardUs = 3'000'000;
 
  protected:
   void tick() override;
@@ -93,6 +107,9 @@ class ProjectionNode final : public runtime::Node {
   void capture_if_due();
   void publish_round();
   void request_hint();
+  void set_condition(DisplayCondition condition, const std::string& by);
+  void on_study_session(const study_session_t& s);
+  void send_done();
   bool awaiting_prediction() const;
   void save_rounds();
   void restore_rounds();
@@ -103,7 +120,7 @@ class ProjectionNode final : public runtime::Node {
   std::unique_ptr<Beeper> beeper_;
   BestOverhang best_overhang_;
   std::string stack_channel_, prediction_channel_, command_channel_, round_channel_, projector_channel_,
-      timing_channel_;
+      timing_channel_, study_command_channel_;
 
   std::optional<calibration_t> applied_calibration_;  // the last one taken (applied or rejected)
   Scene scene_;
@@ -135,6 +152,12 @@ class ProjectionNode final : public runtime::Node {
   int64_t stack_arrived_utime_ = -1;           // when the drawn stack arrived
   int64_t last_prediction_utime_ = INT64_MIN;  // when the last prediction arrived
   int64_t start_utime_ = 0;
+  DisplayCondition condition_ = DisplayCondition::kProposed;
+  std::optional<study_session_t> study_session_;  // the newest heard
+  int64_t study_session_utime_ = INT64_MIN;        // when it arrived (bus clock)
+  std::optional<int8_t> study_condition_;          // the last session condition adopted
+  std::string drawn_instruction_;
+  int64_t study_command_sequence_ = 0;
 };
 
 }  // namespace bricklayer::projection
