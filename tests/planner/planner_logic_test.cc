@@ -4,8 +4,10 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <vector>
 
 #include "bricklayer/core/predict.h"
+#include "bricklayer/runtime/codec.h"
 
 using namespace bricklayer;
 
@@ -95,4 +97,50 @@ TEST_CASE("invalid stacks are rejected with a StackError") {
   lying.num_blocks = 7;  // length field disagrees with the blocks
   CHECK_THROWS_AS(logic.on_stack(lying), core::StackError);
   CHECK_FALSE(logic.hint_for_newest());
+}
+
+TEST_CASE("every way a block can end has its own code in the message") {
+  CHECK(planner::end_state(planner::BlockEnd::kUntouched) == collapse_preview_t::END_UNTOUCHED);
+  CHECK(planner::end_state(planner::BlockEnd::kAtRest) == collapse_preview_t::END_AT_REST);
+  CHECK(planner::end_state(planner::BlockEnd::kSlidAway) == collapse_preview_t::END_SLID_AWAY);
+  CHECK(planner::end_state(planner::BlockEnd::kFellOff) == collapse_preview_t::END_FELL_OFF);
+  CHECK(planner::end_state(planner::BlockEnd::kMoving) == collapse_preview_t::END_STILL_MOVING);
+  // to_message keeps the stack's order, through LCM encoding and back.
+  planner::CollapsePreview preview;
+  preview.times = {0.0};
+  preview.end = {planner::BlockEnd::kFellOff, planner::BlockEnd::kUntouched, planner::BlockEnd::kMoving,
+                 planner::BlockEnd::kSlidAway, planner::BlockEnd::kAtRest};
+  preview.frames = {std::vector<planner::Pose>(5)};
+  core::Stack stack;
+  for (int i = 0; i < 5; ++i) stack.blocks.push_back({10 + i, i, -0.5});
+  const collapse_preview_t msg = planner::to_message(preview, stack, 77, 7);
+  const auto decoded = runtime::decode<collapse_preview_t>(runtime::encode(msg));
+  REQUIRE(decoded);
+  REQUIRE(decoded->num_blocks == 5);
+  CHECK(decoded->block_ids == std::vector<int64_t>{10, 11, 12, 13, 14});
+  CHECK(decoded->end_state == std::vector<int8_t>{collapse_preview_t::END_FELL_OFF, collapse_preview_t::END_UNTOUCHED,
+                                                  collapse_preview_t::END_STILL_MOVING, collapse_preview_t::END_SLID_AWAY,
+                                                  collapse_preview_t::END_AT_REST});
+}
+
+TEST_CASE("a pile whose top block tips off the edge: that block fell off, the one under it stays") {
+  // The bottom block ends at the edge; the top one's centre is 0.2 beyond the bottom one's end: it turns about
+  // that end and falls past the edge; the bottom one carries its push at the edge and stays.
+  planner::PlannerLogic logic;
+  const auto stack = message({{0, -1.0}, {1, -0.3}}, 3);
+  logic.on_stack(stack);
+  const prediction_t verdict = verdict_for(stack);
+  REQUIRE_FALSE(verdict.balanced);
+  REQUIRE(verdict.blocks[0].state == block_prediction_t::STATE_STABLE);
+  REQUIRE(verdict.blocks[1].state == block_prediction_t::STATE_CAUSE);
+  const auto preview = logic.preview_for(verdict);
+  REQUIRE(preview);
+  const auto decoded = runtime::decode<collapse_preview_t>(runtime::encode(*preview));
+  REQUIRE(decoded);
+  REQUIRE(decoded->end_state.size() == 2);
+  CHECK(decoded->end_state == preview->end_state);
+  CHECK(decoded->end_state[1] == collapse_preview_t::END_FELL_OFF);
+  CHECK((decoded->end_state[0] == collapse_preview_t::END_UNTOUCHED ||
+         decoded->end_state[0] == collapse_preview_t::END_AT_REST));
+  CHECK(decoded->poses == preview->poses);
 }

@@ -97,6 +97,27 @@ TEST_CASE("the planner answers a hint request and an unbalanced prediction") {
   CHECK(y(last, 0) == y(0, 0));       // the balanced bottom stays
 }
 
+TEST_CASE("the preview on the bus says how each block ends: the top one fell off, the bottom one stays") {
+  harness::Rig rig;
+  rig.add<planner::PlannerNode>(planner::PlannerConfig{});
+  auto& rec = rig.record({channel(kPreviewChannel)});
+  core::Stack tipping;
+  tipping.blocks = {{21, 0, -1.0}, {22, 1, -0.3}};  // the top block's centre is 0.2 beyond the bottom one's end
+  const bricklayer::stack_t stack = to_message(tipping, 3);
+  const core::Prediction verdict = core::predict(tipping);
+  REQUIRE(verdict.moving() == std::vector<int64_t>{22});
+  rig.publish(channel(kStackChannel), stack);
+  rig.publish(channel(kPredictionChannel), to_message(verdict, stack));
+  auto preview = rec.wait_for<collapse_preview_t>(channel(kPreviewChannel), {}, 10s);
+  REQUIRE(preview);  // encoded on the bus and decoded by the recorder
+  CHECK(preview->frame_number == 3);
+  REQUIRE(preview->block_ids == std::vector<int64_t>{21, 22});
+  REQUIRE(preview->end_state.size() == 2);
+  CHECK(preview->end_state[1] == collapse_preview_t::END_FELL_OFF);
+  CHECK((preview->end_state[0] == collapse_preview_t::END_UNTOUCHED ||
+         preview->end_state[0] == collapse_preview_t::END_AT_REST));
+}
+
 TEST_CASE("the planner remembers invalid stacks as errors, and asks for a stack before it can hint") {
   harness::Rig rig;
   auto& node = rig.add<planner::PlannerNode>(planner::PlannerConfig{});

@@ -33,8 +33,6 @@ void PlannerLogic::on_stack(const stack_t& msg) {
   while (stacks_.size() > std::max<size_t>(config_.remembered_stacks, 1)) stacks_.pop_front();
 }
 
-// The message's code for how a block ends (the simulation's enum is the planner's own; the message's
-// values are fixed by the schema).
 int8_t end_state(BlockEnd end) {
   switch (end) {
     case BlockEnd::kUntouched: return collapse_preview_t::END_UNTOUCHED;
@@ -43,7 +41,7 @@ int8_t end_state(BlockEnd end) {
     case BlockEnd::kFellOff: return collapse_preview_t::END_FELL_OFF;
     case BlockEnd::kMoving: return collapse_preview_t::END_STILL_MOVING;
   }
-  return collapse_preview_t::END_STILL_MOVING;
+  return collapse_preview_t::END_STILL_MOVING;  // not a BlockEnd: claim nothing about where the block ended
 }
 
 collapse_preview_t to_message(const CollapsePreview& preview, const core::Stack& stack, int64_t utime,

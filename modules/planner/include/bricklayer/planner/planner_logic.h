@@ -64,7 +64,12 @@ class PlannerLogic {
   std::deque<Seen> stacks_;
 };
 
-// The message for a preview of `stack` (its block ids in order); times in seconds of real blocks.
+// The message's code for how a block ends (collapse_preview_t::END_*): the simulation's enum is the planner's
+// own, the message's values are fixed by the schema.
+int8_t end_state(BlockEnd end);
+
+// The message for a preview of `stack` (its block ids in order); times in seconds of real blocks; end_state from
+// preview.end (END_STILL_MOVING for a block the preview does not cover).
 collapse_preview_t to_message(const CollapsePreview& preview, const core::Stack& stack, int64_t utime,
                               int64_t frame_number);
 
