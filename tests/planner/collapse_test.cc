@@ -227,3 +227,36 @@ TEST_CASE("bad input is an error") {
     CHECK_THROWS_AS(simulate_collapse(ok, o), std::invalid_argument);
   }
 }
+
+TEST_CASE("a block woken because it rests on a moving block has its weight in that very step") {
+  // B overhangs its support S by 0.2 and would tip alone, but C on top of it (centre 0.05 inside B's left end)
+  // holds it: the pair's centre is 0.025 inside S's end, so nothing moves. B is marked moving, C asleep: C wakes
+  // in the first step because it rests on B. Woken without that step's gravity, C weighed nothing and B tipped.
+  CollapseInput in;
+  in.blocks.push_back({0, -2.0, false});   // S, on the surface
+  in.blocks.push_back({1, -1.3, true});    // B
+  in.blocks.push_back({2, -1.75, false});  // C
+  const CollapsePreview p = simulate_collapse(in);
+  REQUIRE(p.initial.size() == 3);
+  for (const Acceleration& a : p.initial) {
+    CHECK(std::abs(a.x) < 1e-12);
+    CHECK(std::abs(a.y) < 1e-12);
+    CHECK(std::abs(a.angle) < 1e-12);
+  }
+  CHECK(p.end[1] == BlockEnd::kAtRest);
+  CHECK(p.frames.back()[1].x == Approx(-0.8).margin(1e-6));
+}
+
+TEST_CASE("the first step is the exact initial acceleration: a block past the edge turns about it") {
+  // One block with its centre 0.2 beyond the edge, released from rest: it turns about the edge, alpha =
+  // -d / (I + d^2) and a = d alpha (d = 0.2, I = (1 + h^2) / 12), the exact annotator's values for it.
+  CollapseInput in;
+  in.blocks.push_back({0, -0.3, true});
+  const CollapsePreview p = simulate_collapse(in);
+  const double h = in.block_height, inertia = (1.0 + h * h) / 12.0, d = 0.2;
+  const double alpha = -d / (inertia + d * d);
+  REQUIRE(p.initial.size() == 1);
+  CHECK(p.initial[0].x == 0.0);
+  CHECK(p.initial[0].angle == Approx(alpha).epsilon(1e-9));
+  CHECK(p.initial[0].y == Approx(d * alpha).epsilon(1e-9));
+}

@@ -60,33 +60,6 @@ double time_ms(F f) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// A wide wall of `rows` rows of `per_row` blocks in brick bond whose rows step out over the edge by `step`
-// each (row 0 ends at the edge), jittered by the seed: the steps beyond the balance limit collapse.
-core::Stack stairs_pile(int rows, int per_row, double step, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> jitter(-0.04, 0.04), gap(0.0, 0.03);
-  core::Stack s;
-  int64_t id = 1;
-  for (int r = 0; r < rows; ++r) {
-    double x = step * r - 1.0 + jitter(rng);
-    for (int k = 0; k < per_row; ++k) {
-      s.blocks.push_back({id++, r, x});
-      x -= 1.0 + gap(rng);
-    }
-  }
-  return s;
-}
-
-// A single-column tower of `rows` blocks (centres 0.4 inside the edge, jittered); rows from `lean_from` up
-// are pushed right by `shift`, so the part above leans over its support and topples.
-core::Stack tower_pile(int rows, int lean_from, double shift, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> jitter(-0.03, 0.03);
-  core::Stack s;
-  for (int r = 0; r < rows; ++r) s.blocks.push_back({r + 1, r, -0.9 + jitter(rng) + (r >= lean_from ? shift : 0.0)});
-  return s;
-}
-
 struct PreviewStats {
   std::vector<double> ms;
   int moving = 0, ended = 0, steps = 0;
@@ -203,8 +176,8 @@ int main(int argc, char** argv) {
   for (int seed = 1; seed <= piles; ++seed) {
     const auto useed = static_cast<uint64_t>(seed);
     time_preview(planner::toppling_pile(12, 5, 4, 1.3 + 0.01 * (seed % 40), useed), wall);
-    time_preview(stairs_pile(6, 10, 0.42 + 0.002 * (seed % 40), useed), stairs);
-    time_preview(tower_pile(60, 30 + seed % 10, 0.55 + 0.005 * (seed % 40), useed), tower);
+    time_preview(planner::stairs_pile(6, 10, 0.42 + 0.002 * (seed % 40), useed), stairs);
+    time_preview(planner::tower_pile(60, 30 + seed % 10, 0.55 + 0.005 * (seed % 40), useed), tower);
     if (!hints) continue;
     const core::Stack balanced = planner::wall_pile(12, 5, useed, 0.3);
     planner::Hint hint;

@@ -8,6 +8,10 @@
 #include <string>
 #include <utility>
 
+#include <Eigen/SparseCore>
+
+#include "bricklayer/core/nnls.h"
+
 namespace bricklayer::planner {
 namespace {
 
@@ -239,6 +243,7 @@ class Simulation {
       const long ticks = tick % 2 == 0 && tick + 2 <= max_ticks && calm() ? 2 : 1;
       dt_ = static_cast<double>(ticks) * options_.dt;
       advance();
+      if (out_.steps == 0) record_initial();
       ++out_.steps;
       tick += ticks;
       const double t = static_cast<double>(tick) * options_.dt;
@@ -251,6 +256,7 @@ class Simulation {
     const double t_end = static_cast<double>(tick) * options_.dt;
     if (out_.times.back() < t_end) record(t_end);
     out_.came_to_rest = ended;
+    out_.initial.resize(n_);  // no step at all (nothing awake): every block at rest
     out_.end.resize(n_);
     out_.left_pile.resize(n_);
     for (int i = 0; i < n_; ++i) {
@@ -274,6 +280,15 @@ class Simulation {
       if (b.awake() || (b.state == State::kFalling && b.hi_y > -options_.fall_depth)) return false;
     }
     return true;
+  }
+
+  // Every block starts at rest: its velocity after the first step over the step's length is its acceleration.
+  void record_initial() {
+    out_.initial.resize(n_);
+    for (int i = 0; i < n_; ++i) {
+      const Body& b = bodies_[i];
+      if (b.state != State::kAsleep) out_.initial[i] = {b.v.x / dt_, b.v.y / dt_, b.w / dt_};
+    }
   }
 
   void record(double t) {
@@ -415,6 +430,9 @@ class Simulation {
         const bool rests_on_it = up_from_other > 0.5 && c.separation <= 0.5 * kMargin;
         if (strikes || rests_on_it) {
           wake(sleeper);
+          // This step's gravity, which advance() gave only the blocks awake before it: without it a woken block
+          // weighs nothing in the step it wakes, and the block under it, freed of its load, tips too soon.
+          sleeper.v.y -= dt_;
           woken_[sleeper_index] = 1;
           woken_list_.push_back(sleeper_index);
         }
@@ -496,14 +514,72 @@ class Simulation {
     B.w += c.iib * c.rnb * d;
   }
 
+  // The first step's impulses of island `island`, exactly: the velocity problem (the velocities closest to the
+  // free ones in the mass metric, M = diag(1, 1, I), with every contact's normal velocity at least its target)
+  // is a least-distance program, min |u| subject to G u >= h with u = M^1/2 (v - v_free), G = J M^-1/2 and
+  // h = target - J v_free, solved by NNLS (Lawson & Hanson, "Solving Least Squares Problems", ch. 23): with
+  // E = [G^T; h^T] and f = (0, ..., 0, 1), lambda = argmin |E lambda - f| over lambda >= 0, r = E lambda - f,
+  // the impulses are -lambda / r_last. From rest this is the exact annotator's QP scaled by the step (README
+  // "First step"). Sets the impulses and applies them; false (nothing applied) when NNLS does not converge or
+  // calls the program infeasible, which leaves the island to Gauss-Seidel.
+  bool solve_exactly(int island) {
+    const int begin = island_start_[island], end = island_start_[island + 1];
+    const int m = end - begin;
+    if (m == 0) return true;
+    variable_.assign(n_ + 1, -1);
+    int vars = 0;
+    for (int j = begin; j < end; ++j)
+      for (int body : {contacts_[j].a, contacts_[j].b})
+        if (bodies_[body].awake() && variable_[body] < 0) {
+          variable_[body] = vars;
+          vars += 3;
+        }
+    const double root_inv_inertia = std::sqrt(inv_inertia_);
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(static_cast<size_t>(7 * m));
+    for (int k = 0; k < m; ++k) {
+      const Contact& c = contacts_[begin + k];
+      double normal_velocity = 0.0;  // J v_free
+      auto add = [&](int body, double sign, double rn) {
+        const int v = variable_[body];
+        if (v < 0) return;  // static: asleep or the surface
+        entries.emplace_back(v, k, sign * c.n.x);
+        entries.emplace_back(v + 1, k, sign * c.n.y);
+        entries.emplace_back(v + 2, k, sign * rn * root_inv_inertia);
+        normal_velocity += sign * (c.n.x * vel_[body].x + c.n.y * vel_[body].y + rn * vel_[body].w);
+      };
+      add(c.b, 1.0, c.rnb);
+      add(c.a, -1.0, c.rna);
+      entries.emplace_back(vars, k, c.target - normal_velocity);
+    }
+    Eigen::SparseMatrix<double> e(vars + 1, m);
+    e.setFromTriplets(entries.begin(), entries.end());
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(vars + 1);
+    f(vars) = 1.0;
+    const core::NnlsResult lambda = core::solve_nnls(e, f, 20 * m + 100);
+    if (!lambda.converged) return false;
+    const double last = e.row(vars).dot(lambda.x) - 1.0;
+    if (!(last < -1e-12)) return false;  // |r| = 0: infeasible (an interpenetrating start)
+    for (int k = 0; k < m; ++k) {
+      Contact& c = contacts_[begin + k];
+      c.impulse = -lambda.x(k) / last;
+      if (c.impulse > 0) apply(c, c.impulse);
+    }
+    return true;
+  }
+
   // Projected Gauss-Seidel on the normal impulses, island by island, each until it stops changing. Works on a
-  // compact copy of the velocities (sleeping blocks and the surface stay at zero).
+  // compact copy of the velocities (sleeping blocks and the surface stay at zero). The first step is solved
+  // exactly instead (solve_exactly): it decides which way the pile starts to move, and Gauss-Seidel from no
+  // impulses at all would get that wrong in a few sweeps; its impulses then warm-start the next steps.
   void solve() {
     vel_.assign(n_ + 1, Velocity{});
     for (int i : awake_) vel_[i] = {bodies_[i].v.x, bodies_[i].v.y, bodies_[i].w};
     for (Contact& c : contacts_)
       if (c.impulse > 0) apply(c, c.impulse);
+    const bool first = out_.steps == 0;
     for (int k = 0; k < islands_; ++k) {
+      if (first && solve_exactly(k)) continue;
       const int begin = island_start_[k], end = island_start_[k + 1];
       for (int it = 0; it < options_.max_iterations; ++it) {
         double largest = 0.0;
@@ -619,6 +695,7 @@ class Simulation {
   std::vector<Velocity> vel_;
   std::vector<std::pair<uint64_t, double>> previous_;  // last step's impulses by contact key, sorted
   std::vector<int> parent_, island_index_, island_start_, island_fill_;
+  std::vector<int> variable_;  // solve_exactly: each awake body's first variable, -1 for static ones
   int islands_ = 0;
   struct IslandState {
     bool still = true, flat = true, on_surface = true, touches_pile = false;

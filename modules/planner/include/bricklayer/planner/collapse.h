@@ -68,7 +68,20 @@ enum class BlockEnd : int8_t {
   kMoving = 4,     // still moving at max_time
 };
 
+// A rate of change of a block's velocity: x, y in block lengths per time unit^2 (units of g), angle in radians
+// per time unit^2 (g per block length), counter-clockwise.
+struct Acceleration {
+  double x = 0.0;
+  double y = 0.0;
+  double angle = 0.0;
+};
+
 struct CollapsePreview {
+  // The simulation's initial accelerations: each block's velocity after the first time step (released from rest)
+  // divided by that step's length; zero for a block asleep through it. The same quantities as the exact
+  // annotator's core::BlockVerdict::accel (y) and alpha (angle), which has no horizontal motion (x): the first
+  // step's contact problem is that annotator's QP, solved approximately (README "First step").
+  std::vector<Acceleration> initial;
   std::vector<double> times;                // time units, one per key frame; the last is the end
   std::vector<std::vector<Pose>> frames;    // frames[k][i]: pose of block i at times[k]
   std::vector<BlockEnd> end;                // per block

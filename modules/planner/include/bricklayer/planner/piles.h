@@ -33,4 +33,31 @@ inline core::Stack toppling_pile(int rows, int per_row, int shifted_rows, double
   return s;
 }
 
+// A wide wall of `rows` rows of `per_row` blocks in brick bond whose rows step out over the edge by `step`
+// each (row 0 ends at the edge), jittered by the seed: the steps beyond the balance limit collapse.
+inline core::Stack stairs_pile(int rows, int per_row, double step, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> jitter(-0.04, 0.04), gap(0.0, 0.03);
+  core::Stack s;
+  int64_t id = 1;
+  for (int r = 0; r < rows; ++r) {
+    double x = step * r - 1.0 + jitter(rng);
+    for (int k = 0; k < per_row; ++k) {
+      s.blocks.push_back({id++, r, x});
+      x -= 1.0 + gap(rng);
+    }
+  }
+  return s;
+}
+
+// A single-column tower of `rows` blocks (centres 0.4 inside the edge, jittered); rows from `lean_from` up
+// are pushed right by `shift`, so the part above leans over its support and topples.
+inline core::Stack tower_pile(int rows, int lean_from, double shift, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> jitter(-0.03, 0.03);
+  core::Stack s;
+  for (int r = 0; r < rows; ++r) s.blocks.push_back({r + 1, r, -0.9 + jitter(rng) + (r >= lean_from ? shift : 0.0)});
+  return s;
+}
+
 }  // namespace bricklayer::planner
