@@ -77,11 +77,12 @@ TEST_CASE("other layouts: a type without arrays, bytes left out, nested structs,
 
   TableLayout preview(types, *types.find("bricklayer.collapse_preview_t"));
   LogEvent e;
-  Json p = {{"utime", 1}, {"frame_number", 2}, {"num_blocks", 2}, {"block_ids", {4, 5}}, {"num_frames", 1},
+  Json p = {{"utime", 1}, {"frame_number", 2}, {"num_blocks", 2}, {"block_ids", {4, 5}}, {"end_state", {3, 0}}, {"num_frames", 1},
             {"time_s", {0.5}}, {"num_values", 6}, {"poses", {1, 2, 3, 4, 5, 6.25}}};
   auto rows = preview.rows(e, p);
   REQUIRE(rows.size() == 2);  // one per block id: the first variable-length array
   CHECK(rows[1][column(preview, "block_ids")] == "5");
+  CHECK(rows[0][column(preview, "end_state")] == "3");  // an array as long as block_ids: one per row
   CHECK(rows[0][column(preview, "poses")] == "[1,2,3,4,5,6.25]");
   CHECK(rows[0][column(preview, "time_s")] == "[0.5]");
 }

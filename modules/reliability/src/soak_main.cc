@@ -1,5 +1,5 @@
 // bricklayer-soak: the whole pipeline under load for a bounded time, with optional fault drills, and
-// the checks of issue 8. Run it inside a private network namespace (launch/soak does).
+// the soak and fault-drill checks. Run it inside a private network namespace (launch/soak does).
 //
 // Starts bricklayer-launch with a generated profile (vision, prediction, projection --headless,
 // planner, bricklayer-logger) and plays camera frames onto BL_IMAGE itself: --frames distinct simcam renders
