@@ -14,6 +14,7 @@
 #include "bricklayer/common/channels.h"
 #include "bricklayer/core/predict.h"
 #include "bricklayer/messages/prediction.h"
+#include "bricklayer/messages/stack.h"
 #include "bricklayer/projection/projection_node.h"
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/round_t.hpp"
@@ -33,21 +34,7 @@ struct Board {
   harness::Rig& rig;
   int64_t frame = 0;
   void show(const core::Stack& pile) {
-    bricklayer::stack_t s{};
-    s.utime = rig.now();
-    s.frame_number = ++frame;
-    s.block_length = 1.0;
-    s.block_height = 1.0 / 3.0;
-    s.status = bricklayer::stack_t::STATUS_OK;
-    for (const auto& b : pile.blocks) {
-      bricklayer::block_t bt{};
-      bt.id = b.id;
-      bt.row = b.row;
-      bt.x = b.x;
-      bt.confidence = 1.0;
-      s.blocks.push_back(bt);
-    }
-    s.num_blocks = static_cast<int32_t>(s.blocks.size());
+    const bricklayer::stack_t s = messages::to_stack_message(pile, rig.now(), ++frame);
     rig.publish(channel(kStackChannel), s);
     bricklayer::prediction_t m{};
     messages::put_verdict(core::predict(pile), m);
