@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "bricklayer/status/operator_actions.h"
+#include "bricklayer/study_session_t.hpp"
 #include "harness/scratch.h"
 
 using namespace bricklayer;
@@ -38,6 +39,40 @@ TEST_CASE("each action becomes the command its module obeys") {
     CHECK(a.command->argument == c.argument);
     CHECK_FALSE(a.words.empty());
   }
+}
+
+TEST_CASE("set_condition sends SET_CONDITION with the condition's index, any other condition is a bad request") {
+  const std::pair<const char*, int32_t> conditions[] = {
+      {"blue", study_session_t::CONDITION_BLUE}, {"red", study_session_t::CONDITION_RED},
+      {"proposed", study_session_t::CONDITION_PROPOSED}};
+  for (const auto& [word, index] : conditions) {
+    INFO(word);
+    const ActionAnswer a = decide_action(std::string(R"({"action":"set_condition","condition":")") + word + "\"}",
+                                         kToken, kToken);
+    CHECK(a.http_status == 200);
+    REQUIRE(a.command);
+    CHECK(a.command->command == command_t::SET_CONDITION);
+    CHECK(a.command->index == index);
+    CHECK(a.words == std::string("the display condition is ") + word + " from now on");
+  }
+  for (const std::string body : {R"({"action":"set_condition"})", R"({"action":"set_condition","condition":"green"})",
+                                 R"({"action":"set_condition","condition":3})",
+                                 R"({"action":"set_condition","condition":"Blue"})"}) {
+    INFO(body);
+    const ActionAnswer a = decide_action(body, kToken, kToken);
+    CHECK(a.http_status == 400);
+    CHECK_FALSE(a.command);
+    CHECK(a.words.rfind("the display condition is blue, red or proposed", 0) == 0);
+  }
+  // Through the desk, a bad value is counted as bad and nothing is queued.
+  ActionDesk desk(kToken);
+  CHECK(desk.take(R"({"action":"set_condition","condition":"green"})", kToken).http_status == 400);
+  CHECK(desk.take(R"({"action":"set_condition","condition":"red"})", kToken).http_status == 200);
+  const auto queued = desk.drain();
+  REQUIRE(queued.size() == 1);
+  CHECK(queued[0].index == study_session_t::CONDITION_RED);
+  CHECK(desk.bad() == 1);
+  CHECK(desk.accepted() == 1);
 }
 
 TEST_CASE("no token, a wrong token, or no token file: refused, and nothing to publish") {

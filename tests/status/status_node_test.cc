@@ -207,3 +207,91 @@ TEST_CASE("a server destroyed right after it was built stops (its thread may not
     CHECK(server.port() > 0);
   }
 }
+
+namespace {
+image_t image_of(const std::string& bytes, int32_t format, const std::string& source, int64_t frame) {
+  image_t im{};
+  im.frame_number = frame;
+  im.width = 4;
+  im.height = 2;
+  im.format = format;
+  im.source = source;
+  im.data.assign(bytes.begin(), bytes.end());
+  im.size = static_cast<int32_t>(im.data.size());
+  return im;
+}
+}  // namespace
+
+TEST_CASE("/camera.jpg and /projector.jpg serve the latest image's bytes, 404 before any") {
+  harness::Rig rig;
+  status::StatusConfig config;
+  config.port = 0;
+  auto& node = rig.add<status::StatusNode>(config);
+  httplib::Client client("127.0.0.1", node.port());
+  for (const char* path : {"/camera.jpg", "/projector.jpg"}) {
+    auto res = client.Get(path);
+    REQUIRE(res);
+    CHECK(res->status == 404);
+    CHECK(res->body.rfind("no ", 0) == 0);
+  }
+  nlohmann::json j = get_state(node.port());
+  CHECK(j["camera"]["seen"] == false);
+  CHECK(j["projector"]["seen"] == false);
+
+  // The bytes are not decoded, so any bytes do: the page gets exactly the newest ones.
+  rig.publish(channel(kImageChannel), image_of("first camera bytes", image_t::FORMAT_JPEG, "/dev/video0", 1));
+  rig.publish(channel(kImageChannel), image_of("second camera bytes", image_t::FORMAT_JPEG, "/dev/video0", 2));
+  rig.publish(channel(kProjectorImageChannel), image_of("projector png bytes", image_t::FORMAT_PNG, "projector", 7));
+  rig.step();
+  auto cam = client.Get("/camera.jpg");
+  REQUIRE(cam);
+  CHECK(cam->status == 200);
+  CHECK(cam->body == "second camera bytes");
+  CHECK(cam->get_header_value("Content-Type") == "image/jpeg");
+  auto proj = client.Get("/projector.jpg");
+  REQUIRE(proj);
+  CHECK(proj->status == 200);
+  CHECK(proj->body == "projector png bytes");
+  CHECK(proj->get_header_value("Content-Type") == "image/png");
+
+  rig.run_for(3s);
+  j = get_state(node.port());
+  CHECK(j["camera"]["seen"] == true);
+  CHECK(j["camera"]["frame_number"] == 2);
+  CHECK(j["camera"]["age_s"].get<double>() >= 3.0);
+  CHECK(j["projector"]["source"] == "projector");
+
+  // A malformed image (a raw 4x2 BGR frame of 5 bytes) is a counted error and the previous one stays.
+  const int64_t errors = node.counters().errors;
+  rig.publish(channel(kImageChannel), image_of("12345", image_t::FORMAT_BGR8, "/dev/video0", 3));
+  rig.step();
+  CHECK(node.counters().errors == errors + 1);
+  CHECK(client.Get("/camera.jpg")->body == "second camera bytes");
+
+  // A raw frame is encoded to a JPEG that decodes to its size.
+  image_t raw = image_of(std::string(4 * 2 * 3, '\x80'), image_t::FORMAT_BGR8, "simcam:test", 4);
+  rig.publish(channel(kImageChannel), raw);
+  rig.step();
+  auto enc = client.Get("/camera.jpg");
+  REQUIRE(enc);
+  CHECK(enc->status == 200);
+  CHECK(enc->get_header_value("Content-Type") == "image/jpeg");
+  REQUIRE(enc->body.size() > 3);
+  CHECK(static_cast<unsigned char>(enc->body[0]) == 0xFF);
+  CHECK(static_cast<unsigned char>(enc->body[1]) == 0xD8);
+  // Asked again within the second: the same encoding, not a new one.
+  CHECK(client.Get("/camera.jpg")->body == enc->body);
+  CHECK(node.camera().encodings() == 1);
+}
+
+TEST_CASE("the round's display condition is on the page's JSON") {
+  harness::Rig rig;
+  status::StatusConfig config;
+  config.port = 0;
+  auto& node = rig.add<status::StatusNode>(config);
+  round_t r{};
+  r.condition = 2;
+  rig.publish(channel(kRoundChannel), r);
+  rig.step();
+  CHECK(get_state(node.port())["round"]["condition"] == "red");
+}

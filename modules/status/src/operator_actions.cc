@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bricklayer/study_session_t.hpp"
+
 namespace bricklayer::status {
 
 namespace {
@@ -115,6 +117,22 @@ ActionAnswer decide_action(const std::string& body, const std::string& token_giv
   } else if (action == "check_calibration") {
     a.command = command(command_t::SELF_CHECK);
     a.words = "the calibration is checked for drift as soon as the board is empty";
+  } else if (action == "set_condition") {
+    // The display condition of the next round (what the blocks' colours mean), as projection reads
+    // command_t.index: study_session_t::CONDITION_BLUE, _RED, _PROPOSED.
+    const std::string condition = text("condition");
+    const int32_t index = condition == "blue"       ? study_session_t::CONDITION_BLUE
+                          : condition == "red"      ? study_session_t::CONDITION_RED
+                          : condition == "proposed" ? study_session_t::CONDITION_PROPOSED
+                                                    : study_session_t::CONDITION_UNKNOWN;
+    if (index == study_session_t::CONDITION_UNKNOWN) {
+      a.http_status = 400;
+      a.words = "the display condition is blue, red or proposed, not '" + condition.substr(0, 40) + "'";
+      return a;
+    }
+    a.command = command(command_t::SET_CONDITION);
+    a.command->index = index;
+    a.words = "the display condition is " + condition + " from now on";
   } else if (action == "restart") {
     const std::string host = text("host"), module = text("module");
     if (!plain_name(host) || !plain_name(module)) {

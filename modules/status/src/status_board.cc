@@ -1,5 +1,7 @@
 #include "bricklayer/status/status_board.h"
 
+#include "bricklayer/study_session_t.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -149,13 +151,21 @@ nlohmann::json StatusBoard::to_json() const {
     worst = Level::failed;
     problems.push_back("no machine heard from yet: the exhibit is not running, or this page listens on another network");
   }
+  // The display condition's word as the page's control names it (study_session_t::CONDITION_* values).
+  auto condition_word = [](int8_t c) -> const char* {
+    return c == study_session_t::CONDITION_BLUE       ? "blue"
+           : c == study_session_t::CONDITION_RED      ? "red"
+           : c == study_session_t::CONDITION_PROPOSED ? "proposed"
+                                                      : "unknown";
+  };
   json round = nullptr;
   if (round_) {
     const round_t& r = *round_;
     const char* state = r.state == round_t::STATE_RUNNING ? "running" : r.state == round_t::STATE_ENDED ? "ended" : "idle";
     round = {{"state", state}, {"remaining_s", static_cast<double>(r.remaining_ms) / 1e3},
              {"duration_s", static_cast<double>(r.duration_ms) / 1e3}, {"score", r.score},
-             {"max_score", r.max_score}, {"num_blocks", r.num_blocks}};
+             {"max_score", r.max_score}, {"num_blocks", r.num_blocks},
+             {"condition", condition_word(r.condition)}};
   }
   return {{"utime", now_}, {"level", level_name(worst)}, {"problems", problems}, {"hosts", hosts},
           {"round", round}, {"best_today", best_today_}};

@@ -10,8 +10,9 @@
 
 namespace bricklayer::status {
 
-StatusServer::StatusServer(const StatusBoard& board, ActionDesk& desk, const std::string& listen, int port)
-    : board_(board), desk_(desk), server_(std::make_unique<httplib::Server>()) {
+StatusServer::StatusServer(const StatusBoard& board, ActionDesk& desk, const std::string& listen, int port,
+                           LatestImage* camera, LatestImage* projector)
+    : board_(board), desk_(desk), camera_(camera), projector_(projector), server_(std::make_unique<httplib::Server>()) {
   server_->Get("/", [this](const httplib::Request&, httplib::Response& res) {
     ++requests_;
     res.set_content(status_page_html(), "text/html; charset=utf-8");
@@ -21,8 +22,27 @@ StatusServer::StatusServer(const StatusBoard& board, ActionDesk& desk, const std
     res.set_header("Cache-Control", "no-store");
     nlohmann::json state = board_.to_json();
     state["actions"] = desk_.enabled();
+    state["camera"] = camera_ ? camera_->to_json() : nlohmann::json{{"seen", false}};
+    state["projector"] = projector_ ? projector_->to_json() : nlohmann::json{{"seen", false}};
     res.set_content(state.dump(), "application/json");
   });
+  // The images: the bytes as they came (or one JPEG a second of a raw frame); never cached, the page
+  // asks again every few seconds for the newest.
+  auto image = [this](LatestImage* latest, const char* what) {
+    return [this, latest, what](const httplib::Request&, httplib::Response& res) {
+      ++requests_;
+      res.set_header("Cache-Control", "no-store");
+      const std::optional<ServedImage> im = latest ? latest->get() : std::nullopt;
+      if (!im) {
+        res.status = 404;
+        res.set_content(std::string("no ") + what + " seen yet", "text/plain; charset=utf-8");
+        return;
+      }
+      res.set_content(im->bytes, im->content_type);
+    };
+  };
+  server_->Get("/camera.jpg", image(camera_, "camera frame (nothing on the camera channel)"));
+  server_->Get("/projector.jpg", image(projector_, "projector image (projection publishes one every 2 s)"));
   server_->Post("/action", [this](const httplib::Request& req, httplib::Response& res) {
     ++requests_;
     const ActionAnswer a = desk_.take(req.body, req.get_header_value("X-Bricklayer-Token"));

@@ -16,6 +16,9 @@ inline constexpr const char* kCommandChannel = "BL_COMMAND";        // command_t
 inline constexpr const char* kCalibrationChannel = "BL_CALIBRATION";  // calibration_t
 inline constexpr const char* kRoundChannel = "BL_ROUND";            // round_t, projection
 inline constexpr const char* kProjectorChannel = "BL_PROJECTOR";    // projector_state_t, projection -> simcam, calibration
+// What the projector shows, small (a 320 px wide JPEG every 2 s of the runtime clock), source "projector":
+// for the operator's status page, which cannot see the projection from the phone.
+inline constexpr const char* kProjectorImageChannel = "BL_PROJECTOR_IMAGE";  // image_t, projection -> status
 inline constexpr const char* kPreviewChannel = "BL_PREVIEW";        // collapse_preview_t, planner
 inline constexpr const char* kHintChannel = "BL_HINT";              // hint_t, planner
 inline constexpr const char* kTruthChannel = "BL_TRUTH";            // stack_t, simcam: the true stack of each frame

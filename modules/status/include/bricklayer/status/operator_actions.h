@@ -1,5 +1,5 @@
 // The operator's actions from the status page: start or reset the round, mark a moment in the log,
-// check the calibration for drift, restart a module. Each is one command_t on BL_COMMAND, which the
+// check the calibration for drift, restart a module, set the display condition. Each is one command_t on BL_COMMAND, which the
 // modules already obey (projection the round, the logger the mark, calibrate the self-check, the
 // host's launcher the restart).
 //
@@ -38,7 +38,8 @@ struct ActionAnswer {
 
 // Decides one request: its body (JSON {"action": ..., "host": ..., "module": ..., "note": ...}) and the
 // token it carried. Actions: "start_round", "reset_round", "mark_moment" (note optional),
-// "check_calibration", "restart" (host and module required). Never throws.
+// "check_calibration", "restart" (host and module required), "set_condition" ("condition": "blue",
+// "red" or "proposed": command_t SET_CONDITION with index 1, 2, 3). Never throws.
 ActionAnswer decide_action(const std::string& body, const std::string& token_given, const std::string& token_expected);
 
 // The actions queued by the server's thread for the node's thread, and the counts the heartbeat shows.

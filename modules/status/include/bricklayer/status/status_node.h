@@ -4,7 +4,8 @@
 //             newest wins), BL_HEARTBEAT (heartbeat_t: each module's own figures for the page).
 //             Malformed messages are counted errors.
 // Serves:     http://LISTEN:PORT/ (a page that polls /state.json every second), /state.json (the
-//             StatusBoard's JSON) and POST /action (operator actions, with the token; operator_actions.h),
+//             StatusBoard's JSON, with "camera" and "projector": each image's age), /camera.jpg,
+//             /projector.jpg and POST /action (operator actions, with the token; operator_actions.h),
 //             from the StatusServer's own thread.
 // Publishes:  BL_COMMAND (command_t) for every accepted action; BL_HEARTBEAT once a second (status "no
 //             host states for N s" when every launcher is silent; values actions_accepted,
@@ -58,12 +59,15 @@ class StatusNode final : public runtime::Node {
   int port() const { return server_->port(); }
   const StatusServer& server() const { return *server_; }
   const ActionDesk& desk() const { return *desk_; }
+  const LatestImage& camera() const { return camera_; }
+  const LatestImage& projector() const { return projector_; }
 
  private:
   void tick() override;
   void before_heartbeat() override;
 
   StatusBoard board_;
+  LatestImage camera_, projector_;
   std::unique_ptr<ActionDesk> desk_;
   std::unique_ptr<StatusServer> server_;
   int64_t commands_sent_ = 0;
