@@ -47,7 +47,15 @@ class CameraSource final : public FrameSource {
 class VideoSource final : public FrameSource {
  public:
   VideoSource(const std::string& path, double fps, bool loop) : path_(path), loop_(loop) {
-    if (!cap_.open(path) || !cap_.isOpened()) throw std::runtime_error("cannot open video file '" + path + "'");
+    // A missing file is said plainly, before any backend tries it (GStreamer's attempt prints three
+    // lines of its own and leaves allocations behind).
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) throw std::runtime_error("video file '" + path + "' does not exist");
+    // FFmpeg first: it reads every container the exhibit records and decodes the same frames on every
+    // machine, so a replayed video gives the same pixels; any other backend only if FFmpeg cannot.
+    bool opened = cap_.open(path, cv::CAP_FFMPEG) && cap_.isOpened();
+    if (!opened) opened = cap_.open(path) && cap_.isOpened();
+    if (!opened) throw std::runtime_error("cannot open video file '" + path + "'");
     fps_ = fps > 0 ? fps : cap_.get(cv::CAP_PROP_FPS);
     if (!(fps_ > 0)) fps_ = 30.0;
   }
