@@ -7,6 +7,7 @@
 #include "bricklayer/command_t.hpp"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/core/predict.h"
+#include "bricklayer/messages/stack.h"
 #include "bricklayer/study/channels.h"
 #include "bricklayer/study/session_node.h"
 #include "harness/rig.h"
@@ -35,21 +36,7 @@ struct Board {
   harness::Rig& rig;
   int64_t frame = 0;
   void show(const core::Stack& pile) {
-    bricklayer::stack_t s{};
-    s.utime = rig.now();
-    s.frame_number = ++frame;
-    s.block_length = 1.0;
-    s.block_height = 1.0 / 3.0;
-    s.status = bricklayer::stack_t::STATUS_OK;
-    for (const auto& b : pile.blocks) {
-      bricklayer::block_t bt{};
-      bt.id = b.id;
-      bt.row = b.row;
-      bt.x = b.x;
-      bt.confidence = 1.0;
-      s.blocks.push_back(bt);
-    }
-    s.num_blocks = static_cast<int32_t>(s.blocks.size());
+    const bricklayer::stack_t s = messages::to_stack_message(pile, rig.now(), ++frame);
     rig.publish(channel(kStackChannel), s);
     core::PredictOptions options;
     options.position_tolerance = 0.005;

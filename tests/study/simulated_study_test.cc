@@ -15,6 +15,7 @@
 #include <catch2/catch.hpp>
 
 #include "bricklayer/common/channels.h"
+#include "bricklayer/messages/stack.h"
 #include "bricklayer/prediction/prediction_logic.h"
 #include "bricklayer/runtime/log_file.h"
 #include "bricklayer/simcam/scenario.h"
@@ -56,26 +57,6 @@ std::string problem_path(const std::string& name) {
   return std::string(BRICKLAYER_SOURCE_DIR) + "/launch/problems/" + name + ".json";
 }
 
-stack_t stack_message(const core::Stack& pile, int64_t utime, int64_t frame) {
-  stack_t s{};
-  s.utime = utime;
-  s.frame_number = frame;
-  s.block_length = 1.0;
-  s.block_height = pile.block_height;
-  s.table_edge = 0.0;
-  s.status = stack_t::STATUS_OK;
-  for (const auto& b : pile.blocks) {
-    block_t bt{};
-    bt.id = b.id;
-    bt.row = b.row;
-    bt.x = b.x;
-    bt.confidence = 1.0;
-    s.blocks.push_back(bt);
-  }
-  s.num_blocks = static_cast<int32_t>(s.blocks.size());
-  return s;
-}
-
 // Plays one scripted subject's scenario at 10 frames a second into a session driver, recording the bus.
 void run_session(const Scripted& who, runtime::LogWriter& log) {
   SessionConfig config;
@@ -105,7 +86,7 @@ void run_session(const Scripted& who, runtime::LogWriter& log) {
   while (!node.protocol().finished()) {
     const double t = static_cast<double>(rig.now() - t0) / 1e6;
     if (t >= scenario.duration_s) FAIL("the script ran out before the session ended, at step " << int(node.protocol().step()));
-    const stack_t s = stack_message(scenario.stack_at(t), rig.now(), ++frame);
+    const stack_t s = messages::to_stack_message(scenario.stack_at(t), rig.now(), ++frame);
     rig.publish(channel(kStackChannel), s);
     rig.publish(channel(kPredictionChannel), logic.answer(s));
     rig.step();
