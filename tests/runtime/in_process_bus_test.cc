@@ -71,3 +71,31 @@ TEST_CASE("a bus that is down refuses publications and says so") {
   CHECK(send(a, "X", "sent"));
   CHECK(a.problem().empty());
 }
+
+TEST_CASE("settle hands replies to replies on until the bus is quiet, and stops nodes that never are") {
+  InProcessBus hub;
+  Bus& ping = hub.endpoint("ping");
+  Bus& pong = hub.endpoint("pong");
+  // pong answers every PING with a PONG; ping answers the first three PONGs with another PING.
+  int pongs = 0;
+  pong.subscribe("PING", QueuePolicy::keep(10), [&](const Received&) { send(pong, "PONG", "o"); });
+  ping.subscribe("PONG", QueuePolicy::keep(10), [&](const Received&) {
+    if (++pongs < 3) send(ping, "PING", "i");
+  });
+  auto round = [&] {
+    ping.handle(0);
+    pong.handle(0);
+  };
+  CHECK(hub.settle(round) == 0);  // nothing pending: no round at all
+  REQUIRE(send(ping, "PING", "i"));
+  const int rounds = hub.settle(round);
+  CHECK(pongs == 3);
+  CHECK(rounds >= 3);
+  CHECK_FALSE(hub.pending());
+
+  // Two endpoints that answer each other for ever.
+  Bus& echo = hub.endpoint("echo");
+  echo.subscribe("LOOP", QueuePolicy::keep(10), [&](const Received&) { send(echo, "LOOP", "again"); });
+  REQUIRE(send(echo, "LOOP", "start"));
+  CHECK_THROWS_WITH(hub.settle([&] { round(); echo.handle(0); }, 50), Catch::Contains("more than 50 rounds"));
+}

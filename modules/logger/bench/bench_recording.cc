@@ -93,10 +93,11 @@ void simulate(const std::string& scenario, double seconds, double fps, Measure& 
   const int64_t end = hub.now_utime() + static_cast<int64_t>(seconds * 1e6);
   while (hub.now_utime() < end) {
     hub.advance(1000);
-    for (int round = 0; round < 100; ++round) {
+    auto step_all = [&] {
       for (auto& n : nodes) n->step(0);
-      if (!hub.pending()) break;
-    }
+    };
+    step_all();  // the nodes tick even when nothing is queued
+    hub.settle(step_all);
   }
 }
 

@@ -1,6 +1,7 @@
 #include "bricklayer/runtime/in_process_bus.h"
 
 #include <stdexcept>
+#include <string>
 
 namespace bricklayer::runtime {
 
@@ -53,6 +54,17 @@ bool InProcessBus::pending() const {
   for (const auto& e : endpoints_)
     if (!e->queues().empty()) return true;
   return false;
+}
+
+int InProcessBus::settle(const std::function<void()>& handle_round, int max_rounds) {
+  int rounds = 0;
+  for (; pending(); ++rounds) {
+    if (rounds >= max_rounds)
+      throw std::runtime_error("the nodes keep answering each other (more than " + std::to_string(max_rounds) +
+                               " rounds without the bus falling quiet)");
+    handle_round();
+  }
+  return rounds;
 }
 
 void InProcessBus::deliver(const Endpoint& from, const std::string& channel, const uint8_t* data, size_t size) {

@@ -36,6 +36,11 @@ class InProcessBus {
   // Whether any endpoint has messages waiting to be handled.
   bool pending() const;
 
+  // Calls handle_round (every node, recorder and peer handles what is queued, once) while anything is
+  // pending, so replies to replies are delivered too; returns the rounds it took. Nodes that keep
+  // answering each other are a bug of theirs: after max_rounds it throws std::runtime_error.
+  int settle(const std::function<void()>& handle_round, int max_rounds = 10000);
+
   // Called for every message published through any endpoint, in publication order (a tap for tests).
   using Tap = std::function<void(const std::string& endpoint, const std::string& channel, const uint8_t* data,
                                  size_t size, int64_t utime)>;
