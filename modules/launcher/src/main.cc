@@ -5,6 +5,7 @@
 // Subscribes: BL_HEARTBEAT (heartbeat_t). Publishes: BL_HEARTBEAT (module "launcher").
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -12,6 +13,7 @@
 #include "bricklayer/common/flags.h"
 #include "bricklayer/common/lcm_url.h"
 #include "bricklayer/common/log.h"
+#include "bricklayer/launcher/opening_hours.h"
 #include "bricklayer/launcher/profile.h"
 #include "bricklayer/launcher/profile_check.h"
 #include "bricklayer/launcher/supervisor.h"
@@ -42,7 +44,8 @@ int Main(int argc, char** argv) {
   flags.add("host-name", "", "this host's name in the host state on BL_HOST_STATE (default: the machine's name)");
   flags.add("multicast-route", "",
             "interface (lo, eth0) whose multicast route 224.0.0.0/4 the launcher puts back while its bus hears nothing "
-            "(an interface that went down and up loses it); needs CAP_NET_ADMIN. Default: leave routes alone");
+            "(an interface that went down and up loses it); needs CAP_NET_ADMIN. Default: the profile's multicast_route, "
+            "else leave routes alone");
   flags.add_bool("check", "only check the profile: print what would be started and check every file its modules will "
                           "read; exit 2 if a binary or a file is missing");
   if (!flags.parse(argc, argv)) return 0;
@@ -77,7 +80,24 @@ int Main(int argc, char** argv) {
   options.bin_dirs = {fs::absolute(bin).string()};
   options.lcm_url = resolve_lcm_url(flags.get("lcm-url"));
   options.host_name = flags.get("host-name");
-  options.multicast_route_dev = flags.get("multicast-route");
+  // The profile names its LAN interface; --multicast-route overrides it ("" leaves routes alone).
+  options.multicast_route_dev = flags.was_set("multicast-route") ? flags.get("multicast-route") : profile.multicast_route;
+  // For tests only: the opening hours and the nightly restart read this clock instead of the machine's
+  // local time ("[DAY ]HH:MM:SS[ xSPEED]", opening_hours.h), so a test lives through a closing time in seconds.
+  if (const char* clock = std::getenv("BRICKLAYER_LAUNCHER_CLOCK"); clock && *clock) {
+    launcher::TestClock test_clock;
+    try {
+      test_clock = launcher::parse_test_clock(clock);
+    } catch (const std::invalid_argument& e) {
+      throw FlagError(e.what());
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    options.local_clock = [test_clock, t0] {
+      const double real = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      return launcher::advance(test_clock.start, static_cast<int64_t>(real * test_clock.speed));
+    };
+    options.local_clock_speed = test_clock.speed;
+  }
   try {
     check_lcm_url(options.lcm_url);
   } catch (const std::invalid_argument& e) {
@@ -108,6 +128,13 @@ int Main(int argc, char** argv) {
         std::cout << options.duration_s << " s\n";
       else
         std::cout << "until Ctrl-C\n";
+      std::cout << "  opening hours: "
+                << (profile.opening_hours.always_open() ? std::string("always open") : profile.opening_hours.text() + " (local time)")
+                << "\n";
+      if (profile.nightly_restart >= 0)
+        std::cout << "  nightly restart: " << launcher::clock_text(profile.nightly_restart) << " (local time)\n";
+      if (!options.multicast_route_dev.empty())
+        std::cout << "  multicast route: " << options.multicast_route_dev << " (needs CAP_NET_ADMIN)\n";
       const launcher::FileCheckReport files = launcher::check_module_files(plan, options);
       std::cout << "files:\n";
       for (const auto& note : files.notes) std::cout << "  " << note << "\n";

@@ -46,7 +46,7 @@ std::vector<std::string> strings(const json& v, const std::string& where) {
 
 ModuleSpec parse_module(const json& m, const std::string& where) {
   check_keys(m, {"name", "command", "command_with_display", "heartbeat", "restart", "ready_timeout_s",
-                 "heartbeat_timeout_s", "backoff_max_s", "needs", "env"},
+                 "heartbeat_timeout_s", "backoff_max_s", "needs", "env", "when_closed"},
              where);
   ModuleSpec spec;
   if (!m.contains("name") || !m.at("name").is_string() || m.at("name").get<std::string>().empty())
@@ -83,7 +83,20 @@ ModuleSpec parse_module(const json& m, const std::string& where) {
     for (const auto& e : spec.env)
       if (e.find('=') == std::string::npos || e[0] == '=') throw ProfileError(w + ": env entry '" + e + "' is not NAME=value");
   }
+  if (m.contains("when_closed")) {
+    const json& v = m.at("when_closed");
+    if (!v.is_string() || (v.get<std::string>() != "stop" && v.get<std::string>() != "run"))
+      throw ProfileError(w + ": 'when_closed' must be \"stop\" (the default: stopped outside the opening hours) or \"run\"");
+    spec.run_when_closed = v.get<std::string>() == "run";
+  }
   return spec;
+}
+
+// The line of the file where "key" first appears, for errors in values a person types by hand.
+int line_of(const std::string& text, const std::string& key) {
+  const auto at = text.find("\"" + key + "\"");
+  if (at == std::string::npos) return 0;
+  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
 }
 
 }  // namespace
@@ -112,7 +125,8 @@ Profile parse_profile(const std::string& json_text, const std::string& name) {
     throw ProfileError("profile " + name + ": not valid JSON: " + e.what());
   }
   const std::string where = "profile " + name;
-  check_keys(doc, {"description", "modules", "logger", "duration_s", "headless_duration_s", "stop_timeout_s", "notes"},
+  check_keys(doc, {"description", "modules", "logger", "duration_s", "headless_duration_s", "stop_timeout_s", "notes",
+                   "opening_hours", "nightly_restart", "multicast_route"},
              where);
   Profile p;
   p.name = name;
@@ -164,6 +178,35 @@ Profile parse_profile(const std::string& json_text, const std::string& name) {
   p.headless_duration_s = number(doc, "headless_duration_s", 0, where);
   p.stop_timeout_s = number(doc, "stop_timeout_s", 5, where, 0.1);
   if (doc.contains("notes")) p.notes = strings(doc.at("notes"), where + " notes");
+  // Wall-clock times typed by a museum's staff: a mistake names the line, and the profile does not start.
+  auto at_line = [&](const std::string& key) {
+    const int line = line_of(json_text, key);
+    return where + (line > 0 ? " line " + std::to_string(line) : std::string()) + ": '" + key + "'";
+  };
+  if (doc.contains("opening_hours")) {
+    const json& v = doc.at("opening_hours");
+    if (!v.is_string()) throw ProfileError(at_line("opening_hours") + " must be a string such as \"09:30-18:00\"");
+    try {
+      p.opening_hours = OpeningHours::parse(v.get<std::string>());
+    } catch (const std::invalid_argument& e) {
+      throw ProfileError(at_line("opening_hours") + " \"" + v.get<std::string>() + "\": " + e.what());
+    }
+  }
+  if (doc.contains("nightly_restart")) {
+    const json& v = doc.at("nightly_restart");
+    if (!v.is_string()) throw ProfileError(at_line("nightly_restart") + " must be a time of day such as \"03:00\"");
+    try {
+      p.nightly_restart = parse_clock(v.get<std::string>());
+    } catch (const std::invalid_argument& e) {
+      throw ProfileError(at_line("nightly_restart") + ": " + e.what());
+    }
+  }
+  if (doc.contains("multicast_route")) {
+    const json& v = doc.at("multicast_route");
+    if (!v.is_string() || v.get<std::string>().empty() || v.get<std::string>().find_first_of(" /\t") != std::string::npos)
+      throw ProfileError(where + ": 'multicast_route' must be an interface name such as \"eth0\"");
+    p.multicast_route = v.get<std::string>();
+  }
   return p;
 }
 

@@ -78,6 +78,8 @@ LaunchPlan plan_launch(const Profile& profile, const SupervisorOptions& options)
     // are recorded from their first message.
     spec.heartbeat = "logger";
     spec.restart = RestartPolicy::kAlways;
+    // It keeps recording while the exhibit is closed: the closing, the opening, the host states.
+    spec.run_when_closed = true;
     plan.processes.push_back({spec, resolve("logger", argv)});
   }
   for (const auto& spec : profile.modules) {
@@ -161,7 +163,7 @@ bool Supervisor::ready(const Managed& m) const {
 // The start order moves past a module once it is up, or once it has failed to come up: the rest of
 // the exhibit runs while it is retried.
 bool Supervisor::settled(const Managed& m) const {
-  return ready(m) || m.start_failed || m.state == State::kFailed ||
+  return ready(m) || m.start_failed || m.state == State::kFailed || m.state == State::kClosed ||
          (m.spec.heartbeat.empty() && m.state != State::kPending);
 }
 
@@ -225,6 +227,11 @@ void Supervisor::HandleCommand(const command_t& c) {
   if (host != host_label_) return;  // another machine's launcher answers it
   for (auto& m : managed_) {
     if (m.spec.name != name) continue;
+    if (m.state == State::kClosed || m.closing) {
+      say("restart of " + name + " asked for while the exhibit is closed (" + profile_.opening_hours.closed_until(local_now()) +
+          "): it starts at opening");
+      return;
+    }
     if (m.state == State::kWaitingRestart || m.state == State::kFailed || m.state == State::kExited) {
       // Not running (in its backoff, or given up by its policy): the operator's word starts it now.
       say("starting " + name + " now, as the operator asked");
@@ -287,6 +294,12 @@ void Supervisor::ended(Managed& m, Clock::time_point now) {
   bool up_long = m.state == State::kUp && now - m.started > std::chrono::seconds(10);
   const bool asked = m.restart_requested;
   m.restart_requested = false;
+  if (m.closing) {
+    m.closing = false;
+    m.state = State::kClosed;
+    say(m.spec.name + " (pid " + std::to_string(m.proc.pid()) + ") stopped for the closing time: " + m.last_exit);
+    return;
+  }
   bool restart = asked || m.spec.restart == RestartPolicy::kAlways ||
                  (m.spec.restart == RestartPolicy::kOnFailure && !st.clean());
   if (!came_up && !m.spec.heartbeat.empty()) m.start_failed = true;
@@ -313,9 +326,89 @@ void Supervisor::ended(Managed& m, Clock::time_point now) {
   m.restart_at = now + seconds(delay);
 }
 
+LocalTime Supervisor::local_now() const {
+  return options_.local_clock ? options_.local_clock() : local_time_of(std::time(nullptr));
+}
+
+// Opening hours and the nightly restart, on the local clock. Level-triggered: whatever the clock says
+// now is what the modules do, so a launcher started at night keeps them stopped until opening.
+void Supervisor::follow_schedule(Clock::time_point now) {
+  const LocalTime local = local_now();
+  const bool open = profile_.opening_hours.open_at(local);
+  if (open != open_ || !schedule_started_) {
+    int closing = 0;
+    for (const auto& m : managed_) closing += closes(m) ? 1 : 0;
+    if (!open && !schedule_started_)
+      say("closed now (opening hours " + profile_.opening_hours.text() + ", local time " + clock_text(local.second) + "): " +
+          std::to_string(closing) + " of " + std::to_string(managed_.size()) + " processes start at opening; " +
+          profile_.opening_hours.closed_until(local));
+    else if (!open)
+      say("closing time (opening hours " + profile_.opening_hours.text() + ", local time " + clock_text(local.second) +
+          "): stopping " + std::to_string(closing) + " of " + std::to_string(managed_.size()) + " processes; " +
+          profile_.opening_hours.closed_until(local));
+    else if (schedule_started_)
+      say("opening time (opening hours " + profile_.opening_hours.text() + ", local time " + clock_text(local.second) +
+          "): starting the modules");
+    if (open && schedule_started_) all_up_announced_ = false;  // say "all up" (and where to look) again each opening
+    open_ = open;
+  }
+  for (size_t i = 0; i < managed_.size(); ++i) {
+    Managed& m = managed_[i];
+    if (!closes(m)) continue;
+    if (open) {
+      if (m.state != State::kClosed) continue;
+      // In start order again: the start loop goes on from the first module it finds waiting.
+      m.state = State::kPending;
+      m.start_failed = false;
+      m.quick_failures = 0;
+      next_to_start_ = std::min(next_to_start_, i);
+      continue;
+    }
+    switch (m.state) {
+      case State::kStarting:
+      case State::kUp:
+        if (!m.closing) {
+          m.closing = true;
+          m.close_deadline = now + seconds(profile_.stop_timeout_s);
+          m.proc.signal(SIGTERM);
+        } else if (now > m.close_deadline && m.proc.running()) {
+          say(m.spec.name + " ignored SIGTERM for " + format_seconds(profile_.stop_timeout_s) + " s at closing time: SIGKILL");
+          m.proc.signal(SIGKILL);
+          m.close_deadline = now + std::chrono::hours(1);  // one kill; the reap takes it
+        }
+        break;
+      case State::kWaitingRestart:
+      case State::kFailed:
+      case State::kExited:
+        m.state = State::kClosed;  // a one-shot or a failed module starts afresh at opening
+        break;
+      case State::kPending:  // the start loop marks it closed in its turn
+      case State::kStopped:
+      case State::kClosed: break;
+    }
+  }
+  // Once a day every running process starts afresh, cleanly (SIGTERM; the reap starts it again at once).
+  if (profile_.nightly_restart >= 0 && schedule_started_ && passes(prev_local_, local, profile_.nightly_restart)) {
+    int n = 0;
+    for (auto& m : managed_) {
+      if ((m.state != State::kStarting && m.state != State::kUp) || m.closing || !m.proc.running()) continue;
+      m.restart_requested = true;
+      m.proc.signal(SIGTERM);
+      ++n;
+    }
+    ++nightly_restarts_;
+    say("nightly restart (" + clock_text(profile_.nightly_restart) + "): restarting " + std::to_string(n) +
+        " running processes" + (open ? "" : " (closed: the others start afresh at opening)"));
+  }
+  prev_local_ = local;
+  schedule_started_ = true;
+}
+
 void Supervisor::tick() {
   if (shutting_down_) return;
   auto now = Clock::now();
+  // 0. Opening hours and the nightly restart.
+  follow_schedule(now);
   // 1. Reap: a dead module is restarted by its policy, after a backoff when it keeps dying quickly.
   for (auto& m : managed_) {
     if ((m.state != State::kStarting && m.state != State::kUp) || m.proc.running()) continue;
@@ -347,6 +440,7 @@ void Supervisor::tick() {
   }
   for (auto& m : managed_) {
     if (!heard) break;
+    if (m.closing) continue;  // stopping for the closing time: its own deadline
     if (m.state == State::kStarting && !m.spec.heartbeat.empty() && now - m.started > seconds(m.spec.ready_timeout_s)) {
       say(m.spec.name + " (pid " + std::to_string(m.proc.pid()) + ") sent no heartbeat on " + channel(kHeartbeatChannel) +
           " within " + format_seconds(m.spec.ready_timeout_s) + " s of starting: killing it (see its output above)");
@@ -361,12 +455,22 @@ void Supervisor::tick() {
     }
   }
   // 4. Start in order: the next module once everything before it is up, or has failed to come up.
+  //    Outside the opening hours a module that closes is marked closed instead; a running one is skipped
+  //    (the order is gone through again from the first module that opens).
   while (next_to_start_ < managed_.size() && (next_to_start_ == 0 || settled(managed_[next_to_start_ - 1]))) {
-    start(managed_[next_to_start_]);
+    Managed& m = managed_[next_to_start_];
+    if (m.state == State::kPending) {
+      if (!open_ && closes(m))
+        m.state = State::kClosed;
+      else
+        start(m);
+    }
     ++next_to_start_;
   }
   // 5. Everything up: say where to look. Anything down: say exactly what, each time that changes.
-  if (next_to_start_ == managed_.size()) {
+  const bool any_closed = std::any_of(managed_.begin(), managed_.end(),
+                                      [](const Managed& m) { return m.state == State::kClosed || m.closing; });
+  if (next_to_start_ == managed_.size() && !any_closed) {
     const std::string down = down_summary();
     const bool all_started_once = std::all_of(managed_.begin(), managed_.end(), [this](const Managed& m) { return settled(m); });
     if (down.empty() && !all_up_announced_) {
@@ -408,10 +512,11 @@ std::string Supervisor::down_summary() const {
     switch (m.state) {
       case State::kUp:
       case State::kExited:
-      case State::kStopped: continue;
+      case State::kStopped:
+      case State::kClosed: continue;
       case State::kPending: what = "waiting to start"; break;
       case State::kStarting:
-        if (ready(m)) continue;
+        if (ready(m) || m.closing) continue;
         what = m.start_failed ? "restarting: " + m.last_exit : "starting";
         break;
       case State::kWaitingRestart: what = "restarting: " + m.last_exit; break;
@@ -461,13 +566,16 @@ std::string Supervisor::status_of(const Managed& m, Clock::time_point now) const
     case State::kStarting:
       if (m.spec.heartbeat.empty()) return "running (no heartbeat)";
       return "started " + ago(m.started) + " s ago, no heartbeat yet";
-    case State::kUp: return m.has_beat ? m.last.status : "running (no heartbeat)";
+    case State::kUp:
+      if (m.closing) return "stopping for the closing time";
+      return m.has_beat ? m.last.status : "running (no heartbeat)";
     case State::kWaitingRestart:
       return "restarting in " + format_seconds(std::max(0.0, std::chrono::duration<double>(m.restart_at - now).count())) +
              " s after " + m.last_exit;
     case State::kFailed: return "down for good (restart policy " + to_string(m.spec.restart) + "): " + m.last_exit;
     case State::kExited: return "finished: " + m.last_exit;
     case State::kStopped: return "stopped: " + m.last_exit;
+    case State::kClosed: return profile_.opening_hours.closed_until(local_now());
   }
   return "?";
 }
@@ -491,6 +599,9 @@ host_state_t Supervisor::host_state() const {
       case State::kFailed: s.state = module_state_t::STATE_FAILED; break;
       case State::kExited: s.state = module_state_t::STATE_EXITED; break;
       case State::kStopped: s.state = module_state_t::STATE_STOPPED; break;
+      // Not started yet, as WAITING says, and starting by itself at opening (restart_in_us). Not STOPPED:
+      // that is a host shut down on purpose, which the other host stops missing.
+      case State::kClosed: s.state = module_state_t::STATE_WAITING; break;
     }
     const bool running = (m.state == State::kStarting || m.state == State::kUp) && m.proc.started();
     s.pid = running ? m.proc.pid() : 0;
@@ -499,6 +610,9 @@ host_state_t Supervisor::host_state() const {
     s.restart_in_us = m.state == State::kWaitingRestart
                           ? std::max<int64_t>(0, std::chrono::duration_cast<std::chrono::microseconds>(m.restart_at - now).count())
                           : 0;
+    if (m.state == State::kClosed)
+      s.restart_in_us = static_cast<int64_t>(static_cast<double>(profile_.opening_hours.seconds_until_open(local_now())) * 1e6 /
+                                             std::max(1e-6, options_.local_clock_speed));
     const Totals t = totals(m);
     s.received = t.received;
     s.published = t.published;
@@ -513,6 +627,11 @@ host_state_t Supervisor::host_state() const {
   const std::string down = down_summary();
   const std::string silent = silent_peers(now);
   hs.status = down.empty() ? "" : "down: " + down;
+  if (!open_) {
+    // "closed until 09:30": what the status page shows for this host all night.
+    const std::string closed = profile_.opening_hours.closed_until(local_now());
+    hs.status = closed + (hs.status.empty() ? "" : "; " + hs.status);
+  }
   if (!silent.empty()) hs.status += (hs.status.empty() ? "" : "; ") + silent;
   if (hs.status.empty()) hs.status = "ok";
   return hs;
@@ -520,8 +639,12 @@ host_state_t Supervisor::host_state() const {
 
 void Supervisor::before_heartbeat() {
   const host_state_t hs = host_state();
+  int closed = 0;
+  for (const auto& m : managed_) closed += m.state == State::kClosed ? 1 : 0;
   node_->set_value("modules_up", hs.modules_up);
-  node_->set_value("modules_down", hs.num_modules - hs.modules_up);
+  node_->set_value("modules_down", hs.num_modules - hs.modules_up - closed);
+  node_->set_value("modules_closed", closed);
+  node_->set_value("nightly_restarts", nightly_restarts_);
   int restarts = 0;
   for (const auto& m : managed_) restarts += m.restarts;
   node_->set_value("restarts_total", restarts);
@@ -535,6 +658,8 @@ int Supervisor::run() {
   last_self_heard_ = t0_;  // grace until the first heartbeat has had time to come back
   if (!profile_.description.empty()) say("profile " + profile_.name + ": " + profile_.description);
   say("LCM bus: " + options_.lcm_url);
+  if (!profile_.opening_hours.always_open()) say("opening hours: " + profile_.opening_hours.text() + " (local time)");
+  if (profile_.nightly_restart >= 0) say("nightly restart of every running process at " + clock_text(profile_.nightly_restart) + " (local time)");
   runtime::Node::install_signal_handlers();
   if (!runtime::Node::stop_requested()) node_->run();
   shutting_down_ = true;
@@ -552,7 +677,17 @@ void Supervisor::shutdown() {
   std::vector<Managed*> order;
   for (auto it = managed_.rbegin(); it != managed_.rend(); ++it)
     if (it->proc.running()) order.push_back(&*it);
-  if (order.empty()) return;
+  // Modules closed for the night are stopped too: the last host state says every module stopped.
+  bool had_closed = false;
+  for (auto& m : managed_) {
+    if (m.state != State::kClosed) continue;
+    m.state = State::kStopped;
+    had_closed = true;
+  }
+  if (order.empty()) {
+    if (had_closed) node_->publish_report(channel(kHostStateChannel), host_state());
+    return;
+  }
   auto is_logger = [this](const Managed* m) { return profile_.logger && m == &managed_.front(); };
   for (Managed* m : order)
     if (!is_logger(m)) m->proc.signal(SIGTERM);

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "bricklayer/launcher/opening_hours.h"
+
 namespace bricklayer::launcher {
 
 class ProfileError : public std::runtime_error {
@@ -27,6 +29,7 @@ struct ModuleSpec {
   double backoff_max_s = 5.0;                // restarts of a module that keeps failing back off up to this
   std::vector<std::string> needs;            // files (relative to the root) it reads: checked by --check
   std::vector<std::string> env;              // extra "NAME=value" entries
+  bool run_when_closed = false;              // "when_closed": "run": kept running outside the opening hours
 };
 
 // Camera frames outside the full-rate windows (modules/logger/README.md, "A day within a disk budget").
@@ -60,9 +63,15 @@ struct Profile {
   double headless_duration_s = 0;            // the default duration when $DISPLAY is unset
   double stop_timeout_s = 5;                 // SIGTERM deadline before SIGKILL
   std::vector<std::string> notes;            // printed once everything is up ("where to look")
+  OpeningHours opening_hours;                // outside them the modules are stopped (default: always open)
+  int nightly_restart = -1;                  // seconds after local midnight every process is restarted; -1 = never
+  // The interface facing the other host on the LAN ("eth0"): the launcher's default --multicast-route, and
+  // what launch/setup --install-service passes with CAP_NET_ADMIN for it. "" = this host uses no LAN.
+  std::string multicast_route;
 };
 
-// Throws ProfileError naming the file and key for unknown keys, missing keys and bad values.
+// Throws ProfileError naming the file and key for unknown keys, missing keys and bad values (the line, for
+// opening_hours and nightly_restart).
 Profile parse_profile(const std::string& json_text, const std::string& name);
 Profile load_profile(const std::string& path);
 

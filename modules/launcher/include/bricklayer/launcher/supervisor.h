@@ -18,9 +18,16 @@
 //             started again at once, whatever its restart policy; one in its backoff or failed starts now).
 // Publishes:  BL_HEARTBEAT (its own, module "launcher"); BL_HOST_STATE (host_state_t, once a second:
 //             every module's state, pid, restarts, uptime, counters summed across restarts, status).
+//
+// The profile's opening hours and nightly restart (opening_hours.h) are read against the local wall
+// clock: outside the hours every module but the logger and those with "when_closed": "run" is stopped
+// (SIGTERM, the stop deadline, SIGKILL) and shown waiting, "closed until 09:30", in the host state and the
+// launcher's heartbeat; at opening they start again in order. At the nightly restart time every running
+// process is stopped with SIGTERM and started again at once, as an operator's RESTART_MODULE does.
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <map>
 #include <set>
 #include <memory>
@@ -30,6 +37,7 @@
 #include "bricklayer/command_t.hpp"
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/host_state_t.hpp"
+#include "bricklayer/launcher/opening_hours.h"
 #include "bricklayer/launcher/process.h"
 #include "bricklayer/launcher/profile.h"
 
@@ -52,6 +60,10 @@ struct SupervisorOptions {
   // The interface of the multicast route (224.0.0.0/4) the launcher puts back while its bus is down
   // (an interface that went down and up loses it); "" = leave routes alone. Needs CAP_NET_ADMIN.
   std::string multicast_route_dev;
+  // The local wall clock the opening hours and the nightly restart are read against; empty = the
+  // machine's local time. Tests give a clock that starts where they want and runs faster.
+  std::function<LocalTime()> local_clock;
+  double local_clock_speed = 1;  // local seconds per real second of local_clock (for "restart in" times)
 };
 
 // What a profile would start on this host: every process (logger first) with its resolved command line.
@@ -86,7 +98,8 @@ class Supervisor {
  private:
   class SupervisorNode;
   using Clock = std::chrono::steady_clock;
-  enum class State { kPending, kStarting, kUp, kWaitingRestart, kFailed, kExited, kStopped };
+  // kClosed: stopped, or never started, because the exhibit is closed (opening hours); starts at opening.
+  enum class State { kPending, kStarting, kUp, kWaitingRestart, kFailed, kExited, kStopped, kClosed };
   struct Totals {
     int64_t received = 0, published = 0, dropped = 0, errors = 0;
   };
@@ -106,6 +119,8 @@ class Supervisor {
     Totals before;              // counters of the earlier processes of this module
     std::string last_exit;
     bool restart_requested = false;  // the operator asked for a restart: the reap restarts it at once
+    bool closing = false;            // SIGTERM sent at closing time: the reap puts it to kClosed
+    Clock::time_point close_deadline{};
   };
 
   void HandleHeartbeat(const heartbeat_t& hb);
@@ -120,6 +135,9 @@ class Supervisor {
   bool settled(const Managed& m) const;
   bool bus_heard(Clock::time_point now) const;
   void repair_route(Clock::time_point now);
+  void follow_schedule(Clock::time_point now);
+  LocalTime local_now() const;
+  bool closes(const Managed& m) const { return !m.spec.run_when_closed; }
   std::string down_summary() const;
   std::string status_of(const Managed& m, Clock::time_point now) const;
   Totals totals(const Managed& m) const;
@@ -151,6 +169,10 @@ class Supervisor {
   std::set<std::string> now_silent_;   // the hosts whose silence has been said
   Clock::time_point next_route_repair_{};
   int64_t unknown_commands_ = 0;  // restarts asked for a module this host does not run
+  bool open_ = true;              // within the opening hours at the last tick
+  bool schedule_started_ = false; // the first tick has read the clock (prev_local_ is set)
+  LocalTime prev_local_{};        // the local clock at the previous tick: the nightly restart fires between two
+  int nightly_restarts_ = 0;
 };
 
 }  // namespace bricklayer::launcher
