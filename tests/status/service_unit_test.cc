@@ -1,6 +1,7 @@
 // launch/setup --install-service PROFILE / --remove-service, into a temporary unit directory: the unit
 // starts launch/bricklayer PROFILE, restarts it on failure, logs to the journal, sets the display for a
-// profile with a projector window only, and passes systemd-analyze verify (when systemd is there).
+// profile with a projector window only, grants CAP_NET_ADMIN (and only it) with --multicast-route to the
+// profiles that use the LAN, and passes systemd-analyze verify (when systemd is there).
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
@@ -58,7 +59,13 @@ TEST_CASE("launch/setup writes and removes the exhibit's systemd unit") {
   REQUIRE(fs::exists(unit));
   std::string text = slurp(unit);
   INFO(text);
-  CHECK(text.find("ExecStart=" + std::string(BRICKLAYER_SOURCE_DIR) + "/launch/bricklayer projector-host\n") != std::string::npos);
+  // The LAN profile's interface (its "multicast_route") goes to the launcher, with the one capability
+  // `ip route replace` needs, and nothing else in the bounding set.
+  CHECK(text.find("ExecStart=" + std::string(BRICKLAYER_SOURCE_DIR) +
+                  "/launch/bricklayer projector-host --multicast-route eth0\n") != std::string::npos);
+  CHECK(text.find("\nAmbientCapabilities=CAP_NET_ADMIN\n") != std::string::npos);
+  CHECK(text.find("\nCapabilityBoundingSet=CAP_NET_ADMIN\n") != std::string::npos);
+  CHECK(projector.out.find("multicast route on eth0 with CAP_NET_ADMIN") != std::string::npos);
   CHECK(text.find("\nRestart=on-failure\n") != std::string::npos);
   CHECK(text.find("\nStandardOutput=journal\n") != std::string::npos);
   CHECK(text.find("\nUser=" + user + "\n") != std::string::npos);
@@ -78,7 +85,33 @@ TEST_CASE("launch/setup writes and removes the exhibit's systemd unit") {
   text = slurp(unit);
   CHECK(text.find("DISPLAY") == std::string::npos);
   CHECK(text.find("\nWantedBy=multi-user.target\n") != std::string::npos);
-  CHECK(text.find("launch/bricklayer camera-host\n") != std::string::npos);
+  CHECK(text.find("launch/bricklayer camera-host --multicast-route eth0\n") != std::string::npos);
+  CHECK(text.find("\nAmbientCapabilities=CAP_NET_ADMIN\n") != std::string::npos);
+  CHECK(text.find("\nCapabilityBoundingSet=CAP_NET_ADMIN\n") != std::string::npos);
+
+  // A camera host whose interface is called otherwise: --multicast-route overrides the profile's.
+  harness::Ran renamed = setup({"--install-service", "camera-host", "--unit-dir", units.string(), "--user", user,
+                                "--multicast-route", "enp3s0"});
+  REQUIRE(renamed.status.clean());
+  text = slurp(unit);
+  CHECK(text.find("launch/bricklayer camera-host --multicast-route enp3s0\n") != std::string::npos);
+  CHECK(text.find("eth0") == std::string::npos);
+  if (auto v = verify(unit)) {
+    INFO(v->out << v->err);
+    CHECK(v->status.clean());
+  }
+
+  // The demo runs on one machine: no LAN, no capability, no route option.
+  harness::Ran demo = setup({"--install-service", "demo", "--unit-dir", units.string(), "--user", user});
+  REQUIRE(demo.status.clean());
+  text = slurp(unit);
+  CHECK(text.find("Capabilit") == std::string::npos);
+  CHECK(text.find("--multicast-route") == std::string::npos);
+  CHECK(text.find("launch/bricklayer demo\n") != std::string::npos);
+  if (auto v = verify(unit)) {
+    INFO(v->out << v->err);
+    CHECK(v->status.clean());
+  }
 
   harness::Ran removed = setup({"--remove-service", "--unit-dir", units.string()});
   CHECK(removed.status.clean());
@@ -93,6 +126,10 @@ TEST_CASE("launch/setup refuses a service for a profile or user that does not ex
   harness::Ran u = setup({"--install-service", "demo", "--unit-dir", dir.str(), "--user", "no-such-user-here"});
   CHECK(u.status.code == 2);
   CHECK(u.err.find("no user 'no-such-user-here'") != std::string::npos);
+  // Whatever --multicast-route says lands in ExecStart: only an interface name is taken.
+  harness::Ran dev = setup({"--install-service", "camera-host", "--unit-dir", dir.str(), "--multicast-route", "eth0; rm"});
+  CHECK(dev.status.code == 2);
+  CHECK(dev.err.find("'eth0; rm' is not an interface name") != std::string::npos);
   CHECK_FALSE(fs::exists(dir / "bricklayer.service"));
 }
 

@@ -74,6 +74,7 @@ Process Process::spawn(const std::vector<std::string>& argv, const SpawnOptions&
     ::setpgid(0, 0);
     ::prctl(PR_SET_PDEATHSIG, SIGTERM);
     if (::getppid() != parent) _exit(126);  // the parent died before prctl took effect
+    if (!options.keep_ambient_capabilities) ::prctl(PR_CAP_AMBIENT, PR_CAP_AMBIENT_CLEAR_ALL, 0, 0, 0);
     // Signal dispositions set to "ignore" survive exec: give the child the defaults back.
     struct sigaction dfl {};
     dfl.sa_handler = SIG_DFL;

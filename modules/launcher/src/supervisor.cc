@@ -536,7 +536,7 @@ void Supervisor::repair_route(Clock::time_point now) {
     return;
   }
   Process p = Process::spawn({ip, "route", "replace", "224.0.0.0/4", "dev", options_.multicast_route_dev},
-                             SpawnOptions{"", {}, "/dev/null", "/dev/null", false});
+                             SpawnOptions{"", {}, "/dev/null", "/dev/null", false, /*keep_ambient_capabilities=*/true});
   auto st = p.wait_for(std::chrono::seconds(2));
   if (st && st->clean()) {
     say("put the multicast route back: ip route replace 224.0.0.0/4 dev " + options_.multicast_route_dev);

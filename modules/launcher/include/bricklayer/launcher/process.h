@@ -18,6 +18,9 @@ struct SpawnOptions {
   std::string stdout_path;               // redirect stdout to this file (truncated); "" = inherit
   std::string stderr_path;               // redirect stderr to this file (truncated); "" = inherit
   bool merge_stderr = false;             // stderr goes where stdout goes
+  // The launcher's service holds CAP_NET_ADMIN as an ambient capability (launch/setup) for its own
+  // `ip route replace` only: every other child starts with the ambient set cleared.
+  bool keep_ambient_capabilities = false;
 };
 
 // How a process ended, decoded from waitpid's status.
