@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -457,4 +458,70 @@ TEST_CASE("on the rig a study session's instruction is shown while its driver is
   const auto any = rec.all<study_command_t>(channel(kStudyCommandChannel));
   REQUIRE(any.size() == 3);
   CHECK(any[2].session_id.empty());
+}
+
+namespace {
+cv::Mat decode(const image_t& im) {
+  return cv::imdecode(cv::Mat(1, static_cast<int>(im.data.size()), CV_8UC1, const_cast<uint8_t*>(im.data.data())),
+                      cv::IMREAD_COLOR);
+}
+}  // namespace
+
+TEST_CASE("on the rig the status page's projector JPEG comes every 2 s of the runtime clock, 320 px wide, in the projected colours") {
+  harness::Rig rig(kStepUs);
+  ProjectionConfig config = quick_config("");
+  auto& rec = rig.record({channel(kProjectorImageChannel), channel(kProjectorChannel)});
+  rig.add<ProjectionNode>(config);
+  Camera camera{rig};
+  camera.pile = true;
+  camera.run(5 * kS);  // the game display with a pile of two blocks
+
+  const auto game = rec.all<image_t>(channel(kProjectorImageChannel));
+  // t = 0, 2 s, 4 s: exactly 2 s apart on the rig's clock (no wall clock could give exact steps).
+  REQUIRE(game.size() == 3);
+  for (size_t i = 1; i < game.size(); ++i) CHECK(game[i].utime - game[i - 1].utime == 2 * kS);
+  for (const image_t& im : game) {
+    CHECK(im.source == "projector");
+    CHECK(im.format == image_t::FORMAT_JPEG);
+    CHECK(im.width == 320);
+    CHECK(im.height == 320 * config.height / config.width);
+    const cv::Mat m = decode(im);
+    REQUIRE(!m.empty());
+    CHECK(m.cols == im.width);
+    CHECK(m.rows == im.height);
+  }
+  // The last JPEG is the presented frame: against the projector state's lossless PNG of the same
+  // moment, scaled to the same size, the colours differ only by JPEG's loss.
+  const auto states = rec.all<projector_state_t>(channel(kProjectorChannel));
+  REQUIRE(!states.empty());
+  const cv::Mat jpeg = decode(game.back());
+  cv::Mat state = decode(states.back().image), state_small;
+  cv::resize(state, state_small, jpeg.size(), 0, 0, cv::INTER_AREA);
+  cv::Mat diff;
+  cv::absdiff(jpeg, state_small, diff);
+  const cv::Scalar mean_diff = cv::mean(diff);
+  INFO("mean colour difference " << mean_diff);
+  CHECK(mean_diff[0] + mean_diff[1] + mean_diff[2] < 3 * 8.0);
+
+  // A solid red pattern on the projector: the JPEG is red everywhere.
+  command_t red{};
+  red.command = command_t::SHOW_PATTERN;
+  red.pattern = command_t::PATTERN_SOLID;
+  red.red = 255;
+  red.sequence = 1;
+  rig.publish(channel(kCommandChannel), red);
+  rig.run_for(2s);
+  const auto all = rec.all<image_t>(channel(kProjectorImageChannel));
+  REQUIRE(all.size() == 4);
+  CHECK(all.back().utime - game.back().utime == 2 * kS);
+  const cv::Mat shown = decode(all.back());
+  REQUIRE(!shown.empty());
+  for (const cv::Point p : {cv::Point(shown.cols / 2, shown.rows / 2), cv::Point(5, 5),
+                            cv::Point(shown.cols - 5, shown.rows - 5)}) {
+    const cv::Vec3b bgr = shown.at<cv::Vec3b>(p);
+    INFO("pixel " << p << " = " << bgr);
+    CHECK(bgr[2] > 230);
+    CHECK(bgr[1] < 25);
+    CHECK(bgr[0] < 25);
+  }
 }

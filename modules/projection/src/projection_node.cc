@@ -156,6 +156,7 @@ ProjectionNode::ProjectionNode(const Config& config, runtime::Bus& bus)
 
   set_tick_ms(std::max(1, 1000 / config.fps));
   next_snapshot_utime_ = config.snapshot_every > 0 ? now() : INT64_MAX;
+  next_status_image_utime_ = config.status_image_every > 0 ? now() : INT64_MAX;
 }
 
 ProjectionNode::~ProjectionNode() = default;
@@ -480,6 +481,26 @@ void ProjectionNode::draw_and_present() {
   unpublished_frame_ = true;
 }
 
+void ProjectionNode::publish_status_image(const cv::Mat& frame, int64_t t) {
+  const int w = std::min(config_.status_image_width, frame.cols);
+  const int h = std::max(1, static_cast<int>(std::lround(static_cast<double>(w) * frame.rows / frame.cols)));
+  cv::Mat small;
+  cv::resize(frame, small, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+  image_t im{};
+  if (!cv::imencode(".jpg", small, im.data, {cv::IMWRITE_JPEG_QUALITY, 80})) {
+    error("failed status images", "cannot encode the projector image as JPEG");
+    return;
+  }
+  im.utime = t;
+  im.frame_number = ++status_images_;
+  im.width = small.cols;
+  im.height = small.rows;
+  im.format = image_t::FORMAT_JPEG;
+  im.source = "projector";
+  im.size = static_cast<int32_t>(im.data.size());
+  publish(channel(kProjectorImageChannel), im);
+}
+
 void ProjectionNode::capture_if_due() {
   const int64_t t = now();
   const bool state_due = unpublished_frame_ &&
@@ -490,11 +511,20 @@ void ProjectionNode::capture_if_due() {
     warn("snapshots without a folder", "snapshot requested but no --snapshot-dir given");
     snapshot_requested_ = false;
   }
+  const bool status_image_due = t >= next_status_image_utime_;
   // A frame waiting for its state message: wake when the rate allows it.
   if (unpublished_frame_ && !state_due) wake_at(last_state_utime_ + static_cast<int64_t>(1e6 / config_.state_hz));
-  if (!state_due && !periodic_snapshot && !requested_snapshot) return;
+  if (!status_image_due && next_status_image_utime_ != INT64_MAX) wake_at(next_status_image_utime_);
+  if (!state_due && !periodic_snapshot && !requested_snapshot && !status_image_due) return;
 
   cv::Mat frame = display_->read_frame();
+  if (status_image_due) {
+    // Sent even when nothing changed: its age on the status page says the projection is alive.
+    publish_status_image(frame, t);
+    // On the runtime clock's schedule, not from when this tick happened to run: the stated rate holds.
+    const auto every = static_cast<int64_t>(config_.status_image_every * 1e6);
+    while (next_status_image_utime_ <= t) next_status_image_utime_ += every;
+  }
   if (state_due) {
     unpublished_frame_ = false;
     const int mode = pattern_ ? projector_state_t::MODE_PATTERN : projector_state_t::MODE_GAME;

@@ -32,6 +32,8 @@ struct ProjectionConfig {
   std::string font = kDefaultFontPath;
   int state_width = 256;
   double state_hz = 15;
+  double status_image_every = 2;
+  int status_image_width = 320;
   int fps = 60;
   std::string renderer;
   bool no_vsync = false;
@@ -73,6 +75,12 @@ struct ProjectionConfig {
     v(runtime::param("state-width", state_width, "width of the game image in projector_state_t, pixels (patterns: full size)")
           .range(16, 16384));
     v(runtime::param("state-hz", state_hz, "at most this many projector_state_t per second").above_up_to(0, 1000));
+    v(runtime::param("status-image-every", status_image_every,
+                     "seconds (runtime clock) between the small JPEGs of what is projected on BL_PROJECTOR_IMAGE, "
+                     "for the operator's status page (0 = none)")
+          .range(0, 3600));
+    v(runtime::param("status-image-width", status_image_width, "width of the status page's projector JPEG, pixels")
+          .range(16, 4096));
     v(runtime::param("fps", fps, "display refresh when the platform does not pace it (vsync)").range(1, 1000));
     v(runtime::param("renderer", renderer, "SDL render driver for --window/--display (\"\" = SDL's choice, software, opengl, ...)"));
     v(runtime::param("no-vsync", no_vsync, "do not wait for the display's vertical sync"));

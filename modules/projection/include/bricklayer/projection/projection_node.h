@@ -12,6 +12,9 @@
 //             --state-hz times a second: the presented image as PNG (game display downscaled to
 //             --state-width, patterns at full projector size) and the sequence of the last pattern
 //             command applied;
+//             BL_PROJECTOR_IMAGE (image_t, source "projector"): what is presented, a JPEG
+//             --status-image-width wide every --status-image-every seconds of the runtime clock (the
+//             operator's status page shows it; small, so the logger records it at its own rate);
 //             BL_COMMAND (command_t REQUEST_HINT) when H is pressed;
 //             BL_STUDY_COMMAND (study_command_t DONE) when D is pressed (the subject says "done");
 //             BL_TIMING (timing_t, stage "present"): prediction received -> frame presented (a real
@@ -105,6 +108,7 @@ class ProjectionNode final : public runtime::Node {
   void advance_round();
   void draw_and_present();
   void capture_if_due();
+  void publish_status_image(const cv::Mat& frame, int64_t t);  // BL_PROJECTOR_IMAGE, the status page's JPEG
   void publish_round();
   void request_hint();
   void set_condition(DisplayCondition condition, const std::string& by);
@@ -147,6 +151,8 @@ class ProjectionNode final : public runtime::Node {
   bool snapshot_requested_ = false;
   int64_t next_snapshot_utime_ = 0;
   int snapshot_count_ = 0;
+  int64_t next_status_image_utime_ = INT64_MAX;  // the next projector JPEG for the status page (runtime clock)
+  int64_t status_images_ = 0;
   int64_t next_round_publish_utime_ = 0;
   int64_t hint_sequence_ = 0;
   int64_t stack_arrived_utime_ = -1;           // when the drawn stack arrived
