@@ -30,6 +30,11 @@ constexpr const char* kPage = R"HTML(<!DOCTYPE html>
   input { font-size: 0.95em; padding: 4px 6px; margin: 3px 0; }
   .figures { color: #555; font-size: 0.85em; }
   .scroll { overflow-x: auto; }
+  /* Two images side by side on a laptop, one above the other on a phone; never wider than the card. */
+  .images { display: flex; flex-wrap: wrap; gap: 10px; }
+  .images figure { margin: 0; flex: 1 1 240px; max-width: 480px; }
+  .images img { width: 100%; height: auto; display: block; background: #ddd; min-height: 40px; }
+  select { font-size: 0.95em; padding: 4px 6px; }
 </style>
 </head>
 <body>
@@ -37,7 +42,12 @@ constexpr const char* kPage = R"HTML(<!DOCTYPE html>
 <div id="overall" class="warning">Waiting for the first answer&hellip;</div>
 <ul id="problems"></ul>
 <div class="card" id="round-card"><h2>Round</h2><div id="round">No round heard of yet.</div>
-  <div>Best today: <b id="best">0</b></div></div>
+  <div>Best today: <b id="best">0</b> | display condition: <b id="condition">not heard yet</b></div></div>
+<div class="card" id="images-card"><h2>What the camera sees, what the projector shows</h2>
+  <div class="images">
+    <figure><img id="camera-img" alt="the latest camera frame"><figcaption id="camera-age" class="muted">No camera frame seen yet.</figcaption></figure>
+    <figure><img id="projector-img" alt="the latest projector image"><figcaption id="projector-age" class="muted">No projector image seen yet.</figcaption></figure>
+  </div></div>
 <div id="hosts"></div>
 <div class="card" id="actions-card"><h2>Actions</h2>
   <div id="actions-off" class="muted"></div>
@@ -48,6 +58,10 @@ constexpr const char* kPage = R"HTML(<!DOCTYPE html>
     <button data-action="reset_round">Reset the round</button>
     <button data-action="check_calibration">Check the calibration</button>
   </div>
+  <div><label>Display condition for the next round
+    <select id="condition-choice"><option value="proposed">proposed (only the blocks that start the fall red)</option>
+      <option value="blue">blue (always blue)</option><option value="red">red (all red while it falls)</option></select></label>
+    <button data-action="set_condition">Set</button></div>
   <div><input id="note" placeholder="what happened (optional)" size="24"> <button data-action="mark_moment">Mark this moment</button></div>
   <div id="action-result" class="muted"></div>
 </div>
@@ -80,6 +94,9 @@ function draw(state) {
       " | score " + r.score + " | MAX " + r.max_score + " | " + r.num_blocks + " blocks";
   }
   document.getElementById("best").textContent = state.best_today;
+  if (state.round) document.getElementById("condition").textContent = state.round.condition;
+  show_image("camera", state.camera, "camera frame");
+  show_image("projector", state.projector, "projector image");
   const hosts = document.getElementById("hosts");
   hosts.replaceChildren(...state.hosts.map((h) => {
     const card = el("div", undefined, "card");
@@ -119,6 +136,22 @@ function draw(state) {
     "Actions are off on this machine (no token file): the page only shows the state.";
   document.getElementById("updated").textContent = "Updated " + new Date().toLocaleTimeString();
 }
+// An image is asked for only once the JSON says one was seen (asking before would be a 404, an error
+// in the browser's console) and again every 3 s; a new URL each time, so no cache keeps an old one.
+const imageAsked = {};
+function show_image(name, info, what) {
+  const age = document.getElementById(name + "-age");
+  if (!info || !info.seen) {
+    age.textContent = "No " + what + " seen yet.";
+    return;
+  }
+  age.textContent = what[0].toUpperCase() + what.slice(1) + " from " + duration(info.age_s) + " ago (" +
+    info.width + " \u00d7 " + info.height + ", " + info.source + ")";
+  const now = Date.now();
+  if (imageAsked[name] && now - imageAsked[name] < 3000) return;
+  imageAsked[name] = now;
+  document.getElementById(name + "-img").src = name + ".jpg?t=" + now;
+}
 // A module's own figures from its heartbeat, at most six, each to three significant digits.
 function figures(f) {
   if (!f) return "";
@@ -143,7 +176,10 @@ async function act(request) {
 }
 for (const b of document.querySelectorAll("#actions-card button")) {
   b.onclick = () => act(b.dataset.action === "mark_moment"
-    ? { action: "mark_moment", note: document.getElementById("note").value } : { action: b.dataset.action });
+    ? { action: "mark_moment", note: document.getElementById("note").value }
+    : b.dataset.action === "set_condition"
+    ? { action: "set_condition", condition: document.getElementById("condition-choice").value }
+    : { action: b.dataset.action });
 }
 let failures = 0;
 async function poll() {
