@@ -1,6 +1,6 @@
 // NETNS, real processes and a real browser: a real bricklayer-launch and bricklayer-status, the page
 // opened in Debian's headless Chromium (modules/status/js/status_page_check.mjs, playwright-core). The
-// page loads with no console errors, shows each module's state and the problems in words; a module
+// page loads with no console errors, shows the camera frame and projector image published on the bus, each module's state and the problems in words; a module
 // killed with -9 turns to a warning on the page and back to ok. The screenshot it takes is the one in
 // the README (build/test-output/status/status-page.png, copied to docs/status-page.png).
 #include <signal.h>
@@ -13,7 +13,13 @@
 #include <fstream>
 #include <thread>
 
+#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "bricklayer/common/channels.h"
+#include "bricklayer/image_t.hpp"
 
 #include "bricklayer/launcher/process.h"
 #include "harness/program.h"
@@ -55,6 +61,26 @@ std::string stderr_of(const harness::Program& p) {
   }
 }
 
+// A test picture as a JPEG image_t: a grey board with a pile of coloured blocks (camera), or the
+// projector's black with the blocks in the game's blue; drawn here, as no camera runs in this test.
+image_t picture(int width, int height, bool projector, const std::string& source) {
+  cv::Mat m(height, width, CV_8UC3, projector ? cv::Scalar(0, 0, 0) : cv::Scalar(150, 150, 150));
+  const int bw = width / 4, bh = height / 10;
+  for (int i = 0; i < 4; ++i) {
+    const cv::Point corner(width / 4 + i * bw / 3, height - (i + 2) * bh);
+    cv::rectangle(m, corner, corner + cv::Point(bw, bh - 2),
+                  projector ? cv::Scalar(230, 120, 30) : cv::Scalar(40, 40 + 50 * i, 200), cv::FILLED);
+  }
+  image_t im{};
+  cv::imencode(".jpg", m, im.data);
+  im.width = width;
+  im.height = height;
+  im.format = image_t::FORMAT_JPEG;
+  im.source = source;
+  im.size = static_cast<int32_t>(im.data.size());
+  return im;
+}
+
 json row(const json& result, const std::string& module) {
   for (const auto& r : result.at("rows"))
     if (r.at("module") == module) return r;
@@ -82,11 +108,32 @@ TEST_CASE("the status page in Chromium: no console errors, the modules' states, 
   INFO("status: " << status.stderr_text() << "\nlaunch: " << launch.stderr_text());
   REQUIRE(pid > 0);
 
+  // A camera frame and a projector image on the bus, until the status page says it has both.
+  {
+    lcm::LCM bus(kUrl);
+    REQUIRE(bus.good());
+    image_t camera = picture(640, 360, false, "/dev/video0");
+    image_t projector = picture(320, 180, true, "projector");
+    bool seen = false;
+    for (int i = 0; i < 50 && !seen; ++i) {
+      camera.frame_number = projector.frame_number = i;
+      bus.publish(channel(kImageChannel), &camera);
+      bus.publish(channel(kProjectorImageChannel), &projector);
+      std::this_thread::sleep_for(100ms);
+      httplib::Client client("127.0.0.1", kPort);
+      if (auto res = client.Get("/state.json"); res && res->status == 200) {
+        const json j = json::parse(res->body);
+        seen = j["camera"]["seen"] == true && j["projector"]["seen"] == true;
+      }
+    }
+    REQUIRE(seen);
+  }
+
   const fs::path out_dir = fs::path(BRICKLAYER_BINARY_DIR) / "test-output" / "status";
   fs::create_directories(out_dir);
   const fs::path shot = out_dir / "status-page.png";
   fs::remove(shot);
-  harness::Ran page = harness::run_program(node, {kScript, kPage, "--screenshot", shot.string()}, 60s);
+  harness::Ran page = harness::run_program(node, {kScript, kPage, "--screenshot", shot.string(), "--images"}, 60s);
   INFO(page.err);
   REQUIRE(page.status.code == 0);
   const json result = json::parse(page.out);
@@ -95,6 +142,11 @@ TEST_CASE("the status page in Chromium: no console errors, the modules' states, 
   CHECK(result.at("console").empty());
   CHECK(result.at("errors").empty());
   CHECK(result.at("failed_requests").empty());
+  // Both images loaded (a broken image has natural width 0), captioned with their source.
+  CHECK(result.at("images").at("camera").at("natural_width") == 640);
+  CHECK(result.at("images").at("projector").at("natural_width") == 320);
+  CHECK(result.at("images").at("camera").at("caption").get<std::string>().rfind("Camera frame from ", 0) == 0);
+  CHECK(result.at("images").at("projector").at("caption").get<std::string>().find("projector)") != std::string::npos);
   const json prediction = row(result, "prediction");
   REQUIRE(prediction.is_object());
   CHECK(prediction.at("cells").at(1) == "up");

@@ -3,7 +3,9 @@
 // an operator would see: console messages, page errors, failed requests, the top line, the problems
 // and every module's row (its level and cells).
 // Usage: node status_page_check.mjs URL [--screenshot OUT.png] [--watch MODULE] [--timeout-s S]
-//                                        [--restart MODULE --token TOKEN [--wrong-token WRONG]]
+//                                        [--restart MODULE --token TOKEN [--wrong-token WRONG]] [--images]
+//   --images: waits until the camera frame and the projector image have loaded and reports their
+//   natural widths and captions in "images".
 //   --watch MODULE: once MODULE's row says "up", prints "watching" on stderr, then records every change
 //   of the row's state, level and restarts until it has restarted and is up again (or the timeout): the test kills the module meanwhile.
 //   --restart MODULE: the same watch, but the restart is the page's own: it types WRONG (when given) into
@@ -94,6 +96,14 @@ try {
         last = now;
       }
     }
+  }
+  if (args.includes("--images")) {
+    await page.waitForFunction(() => ["camera-img", "projector-img"].every((id) => document.getElementById(id).naturalWidth > 0),
+      null, { timeout: timeout_ms });
+    result.images = await page.evaluate(() => Object.fromEntries(["camera", "projector"].map((n) => [n, {
+      natural_width: document.getElementById(n + "-img").naturalWidth,
+      caption: document.getElementById(n + "-age").textContent }])));
+    result.condition = await page.textContent("#condition");
   }
   result.overall = await page.textContent("#overall");
   result.problems = await page.evaluate(() => [...document.querySelectorAll("#problems li")].map((l) => l.textContent));
