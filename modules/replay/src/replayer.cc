@@ -169,8 +169,7 @@ bool Replayer::advance() {
   for (int64_t t = hub_->now_utime() + kStepUs; t < e.utime; t += kStepUs) {
     hub_->set_utime(t);
     start_due(t);
-    step_all();
-    if (hub_->pending()) settle();
+    settle();
   }
   if (e.utime > hub_->now_utime()) hub_->set_utime(e.utime);  // recorders stamp on receipt: keep it monotone
   start_due(hub_->now_utime());
