@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -279,6 +280,15 @@ TEST_CASE("the logger spec: a disk budget, a frame policy, and the command line 
         std::string::npos);
   CHECK(error_of(R"({"modules":[],"logger":{"frames":{"rate":0}}})").find("'rate' must be >=") != std::string::npos);
   CHECK(error_of(R"({"modules":[],"logger":{"frames":5}})").find("'frames' must be an object") != std::string::npos);
+  // Answers thinned with their frames: one more flag; only the two words.
+  const Profile with = parse_profile(R"({"modules":[],"logger":{"file":"logs/x","frames":{"rate":2,"answers":"with_frames"}}})", "t");
+  const std::vector<std::string> with_args = logger_arguments(*with.logger, "f");
+  CHECK(std::count(with_args.begin(), with_args.end(), "--answers-with-frames") == 1);
+  const Profile whole = parse_profile(R"({"modules":[],"logger":{"file":"logs/x","frames":{"rate":2,"answers":"whole"}}})", "t");
+  const std::vector<std::string> whole_args = logger_arguments(*whole.logger, "f");
+  CHECK(std::count(whole_args.begin(), whole_args.end(), "--answers-with-frames") == 0);
+  CHECK(error_of(R"({"modules":[],"logger":{"frames":{"rate":2,"answers":"some"}}})").find("'answers' must be") !=
+        std::string::npos);
 }
 
 TEST_CASE("every shipped profile's logger command line is one bricklayer-logger accepts") {

@@ -1,8 +1,15 @@
 // The recording policy: frames thinned to the reduced rate, every frame in the window around a moment
-// (before it too), every other channel whole, everything in arrival order.
+// (before it too), every other channel whole, everything in arrival order; answers to a frame thinned
+// with it when asked.
 #include <catch2/catch.hpp>
 
+#include <map>
+#include <set>
+
+#include "bricklayer/image_t.hpp"
 #include "bricklayer/logger/recording_policy.h"
+#include "bricklayer/prediction_t.hpp"
+#include "bricklayer/stack_t.hpp"
 
 using namespace bricklayer;
 
@@ -71,4 +78,90 @@ TEST_CASE("held bytes are bounded: the oldest leave early") {
   const auto out = p.release(0);
   CHECK(out.size() >= 80);
   CHECK(p.held_bytes() <= o.max_held_bytes);
+}
+
+namespace {
+template <typename T>
+logger::Event encoded(const std::string& ch, int64_t arrival, const T& msg) {
+  logger::Event e{arrival, ch, std::vector<uint8_t>(static_cast<size_t>(msg.getEncodedSize()))};
+  msg.encode(e.data.data(), 0, static_cast<int>(e.data.size()));
+  return e;
+}
+}  // namespace
+
+TEST_CASE("with answer channels, a thinned frame's stack and prediction go with it, and the windows keep all") {
+  logger::FramePolicyOptions o{"BL_IMAGE", 2, 2, 3};
+  o.answer_channels = {"BL_STACK", "BL_PREDICTION"};
+  logger::RecordingPolicy p(o);
+  std::vector<logger::Event> out;
+  const int64_t moment = 20'000'000, camera_clock = 1'700'000'000'000'000;  // the frames' own clock
+  for (int i = 0; i < 30 * 40; ++i) {
+    const int64_t t = i * kFrameUs;
+    image_t frame{};
+    frame.utime = camera_clock + t;
+    frame.frame_number = 1000 + i;
+    frame.size = 0;
+    stack_t stack{};
+    stack.utime = frame.utime;
+    stack.frame_number = frame.frame_number;
+    prediction_t prediction{};
+    prediction.utime = frame.utime;
+    prediction.frame_number = frame.frame_number;
+    p.offer(encoded("BL_IMAGE", t, frame));
+    p.offer(encoded("BL_STACK", t + 2000, stack));
+    p.offer(encoded("BL_PREDICTION", t + 3000, prediction));
+    p.offer(ev("BL_HEARTBEAT", t + 4000));
+    if (t >= moment && t - kFrameUs < moment) p.moment(t);
+    for (auto& e : p.release(t)) out.push_back(std::move(e));
+  }
+  // An answer to a frame never seen, and one too short to name a frame: both kept.
+  stack_t stray{};
+  stray.utime = 5;
+  stray.frame_number = 5;
+  p.offer(encoded("BL_STACK", 40'000'000, stray));
+  p.offer(logger::Event{40'000'001, "BL_PREDICTION", {1, 2, 3}});
+  for (auto& e : p.release_all()) out.push_back(std::move(e));
+
+  std::map<std::string, std::set<std::pair<int64_t, int64_t>>> keys;
+  std::map<std::string, int> count;
+  for (const auto& e : out) {
+    ++count[e.channel];
+    if (e.channel == "BL_HEARTBEAT" || e.data.size() < 24) continue;
+    int64_t utime = 0, number = 0;
+    for (int b = 0; b < 8; ++b) utime = (utime << 8) | e.data[8 + b], number = (number << 8) | e.data[16 + b];
+    keys[e.channel].insert({utime, number});
+  }
+  keys["BL_STACK"].erase({5, 5});
+  CHECK(count["BL_HEARTBEAT"] == 1200);  // other channels whole
+  CHECK(keys["BL_STACK"] == keys["BL_IMAGE"]);
+  CHECK(keys["BL_PREDICTION"] == keys["BL_IMAGE"]);
+  CHECK(count["BL_STACK"] == p.frames_kept() + 1);
+  CHECK(count["BL_PREDICTION"] == p.frames_kept() + 1);
+  CHECK(p.answers_thinned() == 2 * p.frames_thinned());
+  // The window (2 s before to 3 s after 20 s) kept every frame and so every answer; outside, 2 a second.
+  int in_window = 0;
+  for (const auto& [utime, number] : keys["BL_STACK"])
+    in_window += utime - camera_clock >= moment - 2'000'000 && utime - camera_clock <= moment + 3'000'000;
+  CHECK(in_window >= 5 * 30 - 1);
+  CHECK(p.frames_kept() <= 5 * 30 + 1 + 2 * 35 + 2);
+  CHECK(p.frames_thinned() > 900);
+}
+
+TEST_CASE("without answer channels every stack is kept, whatever became of its frame") {
+  logger::RecordingPolicy p({"BL_IMAGE", 2, 1, 1});
+  for (int i = 0; i < 300; ++i) {
+    image_t frame{};
+    frame.utime = i;
+    frame.frame_number = i;
+    stack_t stack{};
+    stack.utime = i;
+    stack.frame_number = i;
+    p.offer(encoded("BL_IMAGE", i * kFrameUs, frame));
+    p.offer(encoded("BL_STACK", i * kFrameUs + 1, stack));
+  }
+  int stacks = 0;
+  for (const auto& e : p.release_all()) stacks += e.channel == "BL_STACK";
+  CHECK(stacks == 300);
+  CHECK(p.answers_thinned() == 0);
+  CHECK(p.frames_thinned() > 250);
 }

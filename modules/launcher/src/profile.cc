@@ -161,12 +161,18 @@ Profile parse_profile(const std::string& json_text, const std::string& name) {
       throw ProfileError(lw + ": 'split_mb' must be at most half of 'budget_mb' (the file being written is never deleted)");
     if (l.contains("frames") && !l.at("frames").is_null()) {
       const json& f = l.at("frames");
-      if (!f.is_object()) throw ProfileError(lw + ": 'frames' must be an object {rate, before_s, after_s}");
-      check_keys(f, {"rate", "before_s", "after_s"}, lw + " frames");
+      if (!f.is_object()) throw ProfileError(lw + ": 'frames' must be an object {rate, before_s, after_s, answers}");
+      check_keys(f, {"rate", "before_s", "after_s", "answers"}, lw + " frames");
       FrameSpec frames;
       frames.rate = number(f, "rate", frames.rate, lw + " frames", 0.001);
       frames.before_s = number(f, "before_s", frames.before_s, lw + " frames");
       frames.after_s = number(f, "after_s", frames.after_s, lw + " frames");
+      if (f.contains("answers")) {
+        const json& a = f.at("answers");
+        if (!a.is_string() || (a != "with_frames" && a != "whole"))
+          throw ProfileError(lw + " frames: 'answers' must be \"with_frames\" or \"whole\"");
+        frames.answers_with_frames = a == "with_frames";
+      }
       if (frames.rate > 1000 || frames.before_s > 600 || frames.after_s > 600)
         throw ProfileError(lw + " frames: rate at most 1000 a second, windows at most 600 s");
       spec.frames = frames;
@@ -231,6 +237,7 @@ std::vector<std::string> logger_arguments(const LoggerSpec& l, const std::string
     args.push_back("--frame-rate=" + text(l.frames->rate));
     args.push_back("--full-rate-before-s=" + text(l.frames->before_s));
     args.push_back("--full-rate-after-s=" + text(l.frames->after_s));
+    if (l.frames->answers_with_frames) args.push_back("--answers-with-frames");
   }
   args.push_back(file);
   return args;

@@ -114,6 +114,8 @@ int Main(int argc, char** argv) {
   flags.add("rate", "2", "frames kept per second outside windows (the exhibit profiles' policy)");
   flags.add("before", "10", "full rate this long before a moment, s");
   flags.add("after", "10", "full rate this long after a moment, s");
+  flags.add("answers", "with_frames", "with_frames (the exhibit profiles': a thinned frame's stacks, predictions, "
+                                      "timings and previews go with it) or whole");
   if (!flags.parse(argc, argv)) return 0;
   log::set_level(log::parse_level("warn"));
   logger::FramePolicyOptions o;
@@ -121,6 +123,12 @@ int Main(int argc, char** argv) {
   o.rate = flags.get_double("rate");
   o.before_s = flags.get_double("before");
   o.after_s = flags.get_double("after");
+  if (flags.get("answers") == "with_frames") {
+    o.answer_channels = {channel(kStackChannel), channel(kPredictionChannel), channel(kTimingChannel),
+                         channel(kPreviewChannel), channel(kTruthChannel)};
+  } else if (flags.get("answers") != "whole") {
+    throw FlagError("--answers is with_frames or whole");
+  }
   Measure measure(o);
   if (flags.get("logs").empty()) {
     simulate(flags.get("scenario"), flags.get_double("seconds"), flags.get_double("fps"), measure);

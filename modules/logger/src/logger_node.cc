@@ -53,6 +53,9 @@ FramePolicyOptions frame_policy(const LoggerConfig& c) {
   f.rate = c.frame_rate;
   f.before_s = c.full_rate_before_s;
   f.after_s = c.full_rate_after_s;
+  if (c.answers_with_frames)
+    f.answer_channels = {channel(kStackChannel), channel(kPredictionChannel), channel(kTimingChannel),
+                         channel(kPreviewChannel), channel(kTruthChannel)};
   // The delay line shares the unwritten bound: together they never hold more than twice it.
   f.max_held_bytes = static_cast<int64_t>(std::llround(c.max_unwritten_mb * 1024 * 1024));
   return f;
@@ -203,6 +206,7 @@ void LoggerNode::update_figures() {
   set_value("budget_bytes", static_cast<double>(budget_bytes_));
   set_value("frames_kept", static_cast<double>(policy_.frames_kept()));
   set_value("frames_thinned", static_cast<double>(policy_.frames_thinned()));
+  set_value("answers_thinned", static_cast<double>(policy_.answers_thinned()));
   set_value("held_bytes", static_cast<double>(policy_.held_bytes()));
   set_value("moments", static_cast<double>(moments_seen_));
   const int64_t lost = w.dropped + kernel_drops_ + gaps_.load();
@@ -240,7 +244,8 @@ void LoggerNode::before_stop() {
             " kernel drops, ", gaps_.load(), " sequence gaps, ", w.write_errors, " write errors, ", w.lost,
             " not kept (disk full or over budget), ", excluded_, " excluded; ", w.deleted_files, " old file(s) deleted (",
             mb(w.deleted_bytes), "), the series holds ", mb(w.series_bytes), ", ", mb(w.free_bytes), " free; frames ",
-            policy_.frames_kept(), " kept, ", policy_.frames_thinned(), " thinned; ", moments_seen_, " moments");
+            policy_.frames_kept(), " kept, ", policy_.frames_thinned(), " thinned (and ",
+            policy_.answers_thinned(), " of their answers); ", moments_seen_, " moments");
 }
 
 }  // namespace bricklayer::logger

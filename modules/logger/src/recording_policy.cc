@@ -1,9 +1,29 @@
 #include "bricklayer/logger/recording_policy.h"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 namespace bricklayer::logger {
+namespace {
+
+// Frames remembered as thinned: about two minutes at 30 frames a second.
+constexpr size_t kThinnedRemembered = 4096;
+
+// utime and frame_number, the first two fields of image_t and of every answer to a frame: LCM encodes
+// an 8-byte fingerprint, then the fields in declaration order, integers big-endian.
+std::optional<std::pair<int64_t, int64_t>> frame_key(const std::vector<uint8_t>& data) {
+  if (data.size() < 24) return std::nullopt;
+  auto at = [&](size_t offset) {
+    uint64_t v = 0;
+    for (size_t i = 0; i < 8; ++i) v = (v << 8) | data[offset + i];
+    return static_cast<int64_t>(v);
+  };
+  return std::make_pair(at(8), at(16));
+}
+
+}  // namespace
 
 RecordingPolicy::RecordingPolicy(FramePolicyOptions options) : options_(std::move(options)) {
   for (double v : {options_.rate, options_.before_s, options_.after_s})
@@ -36,16 +56,44 @@ bool RecordingPolicy::keep_frame(int64_t t) {
   return false;
 }
 
+bool RecordingPolicy::is_answer(const std::string& channel) const {
+  return std::find(options_.answer_channels.begin(), options_.answer_channels.end(), channel) !=
+         options_.answer_channels.end();
+}
+
+void RecordingPolicy::remember_thinned(const FrameKey& key) {
+  if (!thinned_.insert(key).second) return;
+  thinned_order_.push_back(key);
+  if (thinned_order_.size() > kThinnedRemembered) {
+    thinned_.erase(thinned_order_.front());
+    thinned_order_.pop_front();
+  }
+}
+
 void RecordingPolicy::leave(std::vector<Event>& out) {
   Event& e = held_.front();
   held_bytes_ -= EventWriter::file_size_of(e);
-  if (!thins() || e.channel != options_.frame_channel) {
+  if (!thins()) {
     out.push_back(std::move(e));
-  } else if (keep_frame(e.utime)) {
-    ++frames_kept_;
-    out.push_back(std::move(e));
+  } else if (e.channel == options_.frame_channel) {
+    if (keep_frame(e.utime)) {
+      ++frames_kept_;
+      out.push_back(std::move(e));
+    } else {
+      ++frames_thinned_;
+      if (!options_.answer_channels.empty())
+        if (const auto key = frame_key(e.data)) remember_thinned(*key);
+    }
+  } else if (is_answer(e.channel)) {
+    // An answer leaves after its frame (it arrived after it), so its frame is decided by now.
+    const auto key = frame_key(e.data);
+    if (key && thinned_.count(*key)) {
+      ++answers_thinned_;
+    } else {
+      out.push_back(std::move(e));
+    }
   } else {
-    ++frames_thinned_;
+    out.push_back(std::move(e));
   }
   held_.pop_front();
 }

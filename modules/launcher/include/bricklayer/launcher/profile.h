@@ -37,6 +37,7 @@ struct FrameSpec {
   double rate = 2;       // frames kept per second
   double before_s = 10;  // every frame this long before a moment (red, collapse, round end, mark) ...
   double after_s = 10;   // ... and this long after
+  bool answers_with_frames = false;  // "answers": "with_frames": a thinned frame's stacks, predictions ... go too
 };
 
 struct LoggerSpec {

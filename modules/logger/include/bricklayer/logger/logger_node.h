@@ -21,7 +21,7 @@
 //   windows around moments (recording_policy.h, moment_detector.h). SIGINT/SIGTERM: what was received is
 //   written and synced, then exit 0.
 // Values also: lost (received, not kept: no room), deleted_files, deleted_bytes, series_bytes,
-//   free_bytes, budget_bytes, frames_kept, frames_thinned, held_bytes, moments.
+//   free_bytes, budget_bytes, frames_kept, frames_thinned, answers_thinned, held_bytes, moments.
 #pragma once
 
 #include <atomic>
@@ -58,6 +58,7 @@ struct LoggerConfig {
   double frame_rate = 0;
   double full_rate_before_s = 10;
   double full_rate_after_s = 10;
+  bool answers_with_frames = false;
   bool no_index = false;
 
   template <typename Visitor>
@@ -89,6 +90,8 @@ struct LoggerConfig {
     v(runtime::param("full-rate-before-s", full_rate_before_s, "with --frame-rate: every frame this long before a moment (red, collapse, round end, mark)")
           .range(0, 600));
     v(runtime::param("full-rate-after-s", full_rate_after_s, "with --frame-rate: every frame this long after a moment").range(0, 600));
+    v(runtime::param("answers-with-frames", answers_with_frames,
+                     "with --frame-rate: a thinned frame's stacks, predictions, timings and previews are thinned with it"));
     v(runtime::param("no-index", no_index, "write no FILE.index (it is never written with --rotate > 0: rotation renames the parts)"));
   }
   // "" for a valid regular expression, else why not.

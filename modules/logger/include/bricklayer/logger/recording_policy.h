@@ -8,11 +8,20 @@
 // (all channels, so the file stays in time order) and each frame is decided when it leaves. The price:
 // a logger killed with -9 loses the last before_s seconds instead of the last flush period; a clean
 // stop writes everything. rate 0 keeps every frame and holds nothing.
+//
+// At 60 blocks the answers to each frame (stacks with every block's corners, predictions, timings,
+// previews) outweigh the thinned frames themselves. With answer_channels set, an answer to a frame
+// the policy thinned goes with it, so a thinned stretch holds whole frame-and-answer sets at the
+// reduced rate and the windows hold everything. An answer names its frame by its first two fields,
+// utime and frame_number, as image_t does (every answer type is declared so; replay pairs outputs with
+// inputs by them too).
 #pragma once
 
 #include <cstdint>
 #include <deque>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bricklayer/logger/event_writer.h"
@@ -25,6 +34,7 @@ struct FramePolicyOptions {
   double before_s = 10;     // full rate this long before a moment ...
   double after_s = 10;      // ... and this long after
   int64_t max_held_bytes = 256ll << 20;  // beyond this the oldest held events leave early (decided as they are)
+  std::vector<std::string> answer_channels;  // thinned with the frame they answer (empty: kept whole)
 };
 
 class RecordingPolicy {
@@ -44,12 +54,17 @@ class RecordingPolicy {
 
   int64_t frames_kept() const { return frames_kept_; }
   int64_t frames_thinned() const { return frames_thinned_; }
+  int64_t answers_thinned() const { return answers_thinned_; }
   int64_t held_bytes() const { return held_bytes_; }
   const FramePolicyOptions& options() const { return options_; }
 
  private:
+  using FrameKey = std::pair<int64_t, int64_t>;  // a frame's utime and frame_number
+
   void leave(std::vector<Event>& out);
   bool keep_frame(int64_t utime);
+  bool is_answer(const std::string& channel) const;
+  void remember_thinned(const FrameKey& key);
 
   FramePolicyOptions options_;
   int64_t before_us_, after_us_, period_us_;
@@ -57,7 +72,11 @@ class RecordingPolicy {
   std::deque<int64_t> moments_;  // ascending
   int64_t held_bytes_ = 0;
   int64_t last_kept_ = INT64_MIN;
-  int64_t frames_kept_ = 0, frames_thinned_ = 0;
+  int64_t frames_kept_ = 0, frames_thinned_ = 0, answers_thinned_ = 0;
+  // The frames thinned lately (answers come within a second or so of their frame; a bounded memory,
+  // oldest forgotten first: an answer to a frame forgotten is kept).
+  std::set<FrameKey> thinned_;
+  std::deque<FrameKey> thinned_order_;
 };
 
 }  // namespace bricklayer::logger
