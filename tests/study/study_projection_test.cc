@@ -1,7 +1,8 @@
 // The study session driver and projection on one in-process rig, end to end: the projector lights the pile
 // under the condition the session asked for (all red while a pile falls under red), every round_t of its
 // games carries that condition, the board shows the session's instruction, and key D at the board answers
-// a problem ("done").
+// a problem ("done"); each stabilise problem's pile is outlined on the board while its step runs.
+#include <cmath>
 #include <string>
 
 #include <catch2/catch.hpp>
@@ -19,6 +20,7 @@
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/round_t.hpp"
 #include "bricklayer/study/channels.h"
+#include "bricklayer/study/problem.h"
 #include "bricklayer/study/session_node.h"
 #include "bricklayer/study_answer_t.hpp"
 #include "harness/rig.h"
@@ -84,6 +86,30 @@ cv::Vec3b drawn_at(harness::Recorder& rec, double x, double y) {
   return image.at<cv::Vec3b>(static_cast<int>(p.y / 4), static_cast<int>(p.x / 4));
 }
 
+// The projector's frame outlines exactly this pile (nothing built on it): each block's bottom edge lit in
+// the outline colour just inside, dark just outside and in its middle.
+void check_outlined(projection::ProjectionNode& projector, const core::Stack& pile) {
+  const projection::ProblemView view = projector.problem_view();
+  REQUIRE(view.outlines.size() == pile.blocks.size());
+  const cv::Mat frame = projector.display().read_frame();
+  const board::BoardToProjector mapping;
+  auto at = [&](double x, double y, int dy) {
+    const board::Point2 p = mapping.map(x, y);
+    return frame.at<cv::Vec3b>(static_cast<int>(std::lround(p.y)) + dy, static_cast<int>(std::lround(p.x)));
+  };
+  for (size_t k = 0; k < pile.blocks.size(); ++k) {
+    const core::Block& b = pile.blocks[k];
+    CHECK(view.outlines[k] == projection::ProblemBlock{b.row, b.x});
+    const double y0 = b.row / 3.0;
+    INFO("block " << b.id << " at row " << b.row << ", x " << b.x);
+    const cv::Vec3b on = at(b.x + 0.5, y0, -2);
+    CHECK(on == cv::Vec3b(projection::kProblemOutline.b, 0, projection::kProblemOutline.r));
+    CHECK(at(b.x + 0.5, y0 + 0.5 / 3.0, 0) == cv::Vec3b(0, 0, 0));
+    if (b.row > 0) continue;  // below a row-0 block is the surface, nothing drawn; above it may be another block
+    CHECK(at(b.x + 0.5, y0, 3) == cv::Vec3b(0, 0, 0));
+  }
+}
+
 }  // namespace
 
 TEST_CASE("a study session under red: the projector shows the whole falling pile red, its rounds say red, D answers") {
@@ -144,6 +170,10 @@ TEST_CASE("a study session under red: the projector shows the whole falling pile
   REQUIRE(session.protocol().step_state() == S::STATE_RUNNING);
   rig.step();
   CHECK(projector.instruction().find("Say done") != std::string::npos);
+  // The pile to build is outlined where the problem file puts its blocks; nothing is built yet.
+  CHECK(std::string(projection::kStudyProblemChannel) == study::kProblemChannel);
+  const study::Problem problem_1 = study::load_problem(session_config("red").problem_1);
+  check_outlined(projector, problem_1.pile);
   SDL_Event e{};
   e.type = SDL_KEYDOWN;
   e.key.keysym.sym = SDLK_d;
@@ -152,4 +182,20 @@ TEST_CASE("a study session under red: the projector shows the whole falling pile
   REQUIRE(answer);
   CHECK(answer->problem == 1);
   CHECK(answer->outcome == bricklayer::study_answer_t::OUTCOME_FAILED);
+
+  // The answer is taken: problem 1's outlines go at once; problem 2's come when it runs.
+  rig.step();
+  REQUIRE(session.protocol().step() == S::STEP_PROBLEM_2);
+  REQUIRE(session.protocol().step_state() == S::STATE_READY);
+  CHECK(projector.problem_view().empty());
+  const cv::Mat cleared = projector.display().read_frame();
+  for (const core::Block& b : problem_1.pile.blocks) {
+    const bricklayer::board::Point2 p = bricklayer::board::BoardToProjector{}.map(b.x + 0.5, b.row / 3.0);
+    CHECK(cleared.at<cv::Vec3b>(static_cast<int>(std::lround(p.y)) - 2, static_cast<int>(std::lround(p.x))) ==
+          cv::Vec3b(0, 0, 0));
+  }
+  board.hold(core::Stack{}, 1.5);
+  REQUIRE(session.protocol().step_state() == S::STATE_RUNNING);
+  check_outlined(projector, study::load_problem(session_config("red").problem_2).pile);
+  CHECK(projector.problems_rejected() == 0);
 }

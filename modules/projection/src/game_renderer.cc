@@ -107,11 +107,62 @@ void GameRenderer::draw_game(const Scene& scene, const board::BoardToProjector& 
   const bool stale = !hud.notice.empty();
   // One decision for the board and the miniature (stale: every flag off, every block dim).
   const PileLook look = pile_look(hud.condition, scene, stale);
+  // Under the blocks: a real block put where the problem wants it covers its outline with its verdict.
+  draw_problem_outlines(hud.problem, mapping, scene.block_height());
   draw_blocks(scene, mapping, look, anim_ms);
   draw_minimap(scene, look, anim_ms, stale);
   draw_hud(hud);
   draw_margin(scene, look, anim_ms);
   draw_instruction(hud);
+  draw_problem_target(hud);
+}
+
+void GameRenderer::draw_problem_outlines(const ProblemView& problem, const board::BoardToProjector& mapping,
+                                         double block_height) {
+  layout_.problem_outlines = SDL_Rect{};
+  if (problem.outlines.empty()) return;
+  // As thick as a knife edge's outline: seen across the room, thin beside a block's 32 px height at 768 lines.
+  const double thickness = std::max(2, height_ / 150);
+  float left = 1e9f, top = 1e9f, right = -1e9f, bottom = -1e9f;
+  for (const ProblemBlock& b : problem.outlines) {
+    for (const auto& side : outline_ring(b, block_height, mapping, thickness)) {
+      std::array<SDL_FPoint, 4> corners{};
+      for (size_t q = 0; q < 4; ++q) {
+        corners[q] = to_sdl(side[q]);
+        if (!finite(corners[q])) continue;
+        left = std::min(left, corners[q].x);
+        right = std::max(right, corners[q].x);
+        top = std::min(top, corners[q].y);
+        bottom = std::max(bottom, corners[q].y);
+      }
+      fill_quad(corners, kProblemOutline);
+    }
+  }
+  if (right >= left && bottom >= top) {
+    const int x0 = static_cast<int>(std::floor(left)), y0 = static_cast<int>(std::floor(top));
+    layout_.problem_outlines = SDL_Rect{x0, y0, static_cast<int>(std::ceil(right)) - x0,
+                                        static_cast<int>(std::ceil(bottom)) - y0};
+  }
+}
+
+void GameRenderer::draw_problem_target(const Hud& hud) {
+  if (hud.problem.target.empty()) {
+    layout_.problem_target = SDL_Rect{};
+    return;
+  }
+  const int margin = std::max(4, height_ / 48);
+  const int top = layout_.instruction.w > 0 ? layout_.instruction.y + layout_.instruction.h : below_top_parts();
+  layout_.problem_target = draw_text(kProblemTarget, font_mid_, hud.problem.target, kText, width_ / 2,
+                                     top + margin / 2, 1, width_ * 80 / 100);
+}
+
+int GameRenderer::below_top_parts() const {
+  const int margin = std::max(4, height_ / 48);
+  int top = layout_.minimap.y + layout_.minimap.h + margin / 2 + TTF_FontLineSkip(font_small_);
+  for (const SDL_Rect& r : {layout_.margin, layout_.timer, layout_.round_label, layout_.score, layout_.max, layout_.best,
+                            layout_.day_best})
+    if (r.w > 0) top = std::max(top, r.y + r.h);
+  return top;
 }
 
 void GameRenderer::draw_instruction(const Hud& hud) {
@@ -122,12 +173,8 @@ void GameRenderer::draw_instruction(const Hud& hud) {
   // Below everything at the top (the miniature and its margin line, the timer's lines, the score column),
   // centred and wrapped, so it covers no number and the pile, which rises from the bottom, stays in view.
   const int margin = std::max(4, height_ / 48);
-  int top = layout_.minimap.y + layout_.minimap.h + margin / 2 + TTF_FontLineSkip(font_small_);
-  for (const SDL_Rect& r : {layout_.margin, layout_.timer, layout_.round_label, layout_.score, layout_.max, layout_.best,
-                            layout_.day_best})
-    if (r.w > 0) top = std::max(top, r.y + r.h);
-  layout_.instruction =
-      draw_text(kInstruction, font_small_, hud.instruction, kText, width_ / 2, top + margin / 2, 1, width_ * 60 / 100);
+  layout_.instruction = draw_text(kInstruction, font_small_, hud.instruction, kText, width_ / 2,
+                                  below_top_parts() + margin / 2, 1, width_ * 60 / 100);
 }
 
 void GameRenderer::draw_margin(const Scene& scene, const PileLook& pile, int64_t anim_ms) {

@@ -84,6 +84,9 @@ const ProjectionConfig& checked(const ProjectionConfig& c) {
 constexpr int64_t kPredictionHoldUs = 15'000;
 constexpr int64_t kPredictionsFlowingUs = 2'000'000;
 
+// A problem and the session it belongs to go silent under the same rule.
+static_assert(ProblemOutline::kHeardUs == ProjectionNode::kStudySessionHeardUs);
+
 }  // namespace
 
 void ProjectionNode::check(const Config& c) {
@@ -151,6 +154,8 @@ ProjectionNode::ProjectionNode(const Config& config, runtime::Bus& bus)
   });
   subscribe<study_session_t>(channel(kStudySessionChannel), QueuePolicy::newest(),
                              [this](const study_session_t& s) { on_study_session(s); });
+  subscribe<study_problem_t>(channel(kStudyProblemChannel), QueuePolicy::newest(),
+                             [this](const study_problem_t& p) { on_study_problem(p); });
   // Every command counts (no newest-wins); a flood keeps the newest thousand.
   subscribe<command_t>(command_channel_, QueuePolicy::keep(1000), [this](const command_t& c) { apply_command(c); });
 
@@ -291,9 +296,27 @@ void ProjectionNode::on_study_session(const study_session_t& s) {
   }
 }
 
+const study_session_t* ProjectionNode::heard_session() const {
+  if (!study_session_ || now() - study_session_utime_ > kStudySessionHeardUs) return nullptr;
+  return &*study_session_;
+}
+
 std::string ProjectionNode::instruction() const {
-  if (!study_session_ || now() - study_session_utime_ > kStudySessionHeardUs) return "";
-  return study_session_->instruction;
+  const study_session_t* s = heard_session();
+  return s ? s->instruction : "";
+}
+
+void ProjectionNode::on_study_problem(const study_problem_t& p) {
+  const std::string fault = study_problem_.take(p, now());
+  if (!fault.empty()) {
+    ++problems_rejected_;
+    error("rejected study problems", "study problem " + std::to_string(p.problem) + " '" + p.name +
+                                         "' not drawn: " + fault);
+  }
+}
+
+ProblemView ProjectionNode::problem_view() const {
+  return study_problem_.view(now(), heard_session(), study_session_utime_);
 }
 
 void ProjectionNode::send_done() {
@@ -377,6 +400,8 @@ void ProjectionNode::tick() {
   advance_round();
   // A new instruction, or none once the driver has gone quiet.
   if (instruction() != drawn_instruction_) dirty_ = true;
+  // A problem shown or gone, or its time left down a second.
+  if (problem_view() != drawn_problem_) dirty_ = true;
   // The ghost moves only where it is drawn (proposed).
   const bool animating = !pattern_ && condition_ == DisplayCondition::kProposed && scene_.preview_for_stack() != nullptr;
   const bool refresh = display_->mode() != DisplayMode::kHeadless;  // a real screen redraws every refresh
@@ -442,6 +467,7 @@ void ProjectionNode::publish_round() {
 
 void ProjectionNode::draw_and_present() {
   drawn_instruction_ = instruction();
+  drawn_problem_ = problem_view();
   display_->begin_frame();
   if (pattern_) {
     renderer_->draw_pattern(*pattern_);
@@ -463,6 +489,7 @@ void ProjectionNode::draw_and_present() {
     hud.best_known_up_to = best_overhang_.largest();
     hud.condition = condition_;
     hud.instruction = drawn_instruction_;
+    hud.problem = drawn_problem_;
     renderer_->draw_game(scene_, mapping_, hud, (t - start_utime_) / 1000);
   }
   display_->present();

@@ -6,7 +6,9 @@
 // (display_condition.h), the same decision on the board and in the miniature. While an input is stale
 // (Hud::notice) the blocks lose their verdict colours (dim blue, no ghost, no hint) and the notice is
 // shown in the middle: a frozen red or blue must not pass for the truth. A study session's instruction
-// (Hud::instruction) is shown centred and wrapped below everything else at the top.
+// (Hud::instruction) is shown centred and wrapped below everything else at the top; a study problem
+// (Hud::problem, problem_outline.h) as outlines of the pile to build, drawn under the blocks (a real block
+// put in place covers its outline), or as a score problem's target line under the instruction.
 // Every colour of the game display comes from palette.h: green stays 0 in every pixel.
 #pragma once
 
@@ -25,6 +27,7 @@
 #include "bricklayer/projection/display_condition.h"
 #include "bricklayer/projection/knife_edge_look.h"
 #include "bricklayer/projection/palette.h"
+#include "bricklayer/projection/problem_outline.h"
 #include "bricklayer/projection/round_referee.h"
 #include "bricklayer/projection/scene.h"
 
@@ -49,6 +52,7 @@ struct Hud {
   int best_known_up_to = 0;             // the table's largest block count: a larger pile is told so
   DisplayCondition condition = DisplayCondition::kProposed;  // how the pile is lit
   std::string instruction;              // a study session's words to the subject; "" = none
+  ProblemView problem;                  // the study problem shown (outlines or target); empty = none
 };
 
 // Where the parts of the display were drawn in the last frame (projector pixels). Text rectangles
@@ -65,6 +69,8 @@ struct Layout {
   SDL_Rect day_best{};
   SDL_Rect notice{};
   SDL_Rect instruction{};  // the study session's instruction, all its lines
+  SDL_Rect problem_outlines{};  // the bounds of every study problem outline drawn
+  SDL_Rect problem_target{};    // a score problem's target line
 };
 
 // The line under the timer: how to start a round, or how the last one ended.
@@ -92,7 +98,7 @@ class GameRenderer {
     int w = 0;
     int h = 0;
   };
-  enum Slot { kScore, kScoreLabel, kMax, kBest, kTimer, kRoundLabel, kDayBest, kNotice, kMargin, kInstruction, kSlotCount };
+  enum Slot { kScore, kScoreLabel, kMax, kBest, kTimer, kRoundLabel, kDayBest, kNotice, kMargin, kInstruction, kProblemTarget, kSlotCount };
   // Draws text with its top edge at y; align: 0 left of x, 1 centred on x, 2 right of x. wrap > 0: lines
   // broken at spaces to at most wrap pixels (centred lines when align is 1).
   SDL_Rect draw_text(Slot slot, TTF_Font* font, const std::string& text, Rgb colour, int x, int y, int align, int wrap = 0);
@@ -101,6 +107,9 @@ class GameRenderer {
   void draw_blocks(const Scene& scene, const board::BoardToProjector& mapping, const PileLook& look, int64_t anim_ms);
   void draw_hud(const Hud& hud);
   void draw_instruction(const Hud& hud);  // a study session's words, below everything at the top
+  void draw_problem_outlines(const ProblemView& problem, const board::BoardToProjector& mapping, double block_height);
+  void draw_problem_target(const Hud& hud);  // under the instruction
+  int below_top_parts() const;  // the first row free below the miniature, the timer and the score column
   void draw_minimap(const Scene& scene, const PileLook& look, int64_t anim_ms, bool stale);
   void draw_margin(const Scene& scene, const PileLook& look, int64_t anim_ms);  // knife_edge_look.h's text
   void outline_blocks(const KnifeEdgeLook& look, const Scene& scene, const std::function<SDL_FPoint(double, double)>& at,

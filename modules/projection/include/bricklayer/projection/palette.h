@@ -26,6 +26,9 @@ inline constexpr Rgb kTextDim{110, 160};        // secondary lines
 inline constexpr Rgb kSurface{60, 140};         // the surface in the miniature
 inline constexpr Rgb kGhost{120, 120};          // collapse preview outlines
 inline constexpr Rgb kHint{0, 255};             // hint outlines
+// A study problem's pile to build (problem_outline.h): a dull violet, unlike the verdicts' blue, red and
+// magenta and dimmer than them, so a subject never reads an outline as a verdict.
+inline constexpr Rgb kProblemOutline{170, 120};
 
 inline constexpr Rgb colour_for(BlockState state) {
   switch (state) {

@@ -4,7 +4,9 @@
 //
 // Subscribes: BL_STACK (stack_t), BL_PREDICTION (prediction_t), BL_CALIBRATION (calibration_t),
 //             BL_HINT (hint_t), BL_PREVIEW (collapse_preview_t), BL_STUDY_SESSION (study_session_t: its
-//             instruction is shown while the session driver is heard): newest wins;
+//             instruction is shown while the session driver is heard), BL_STUDY_PROBLEM (study_problem_t:
+//             a stabilise problem's pile drawn as outlines, a score problem's target, while current as
+//             problem_outline.h says; a malformed one is a counted error): newest wins;
 //             BL_COMMAND (command_t): every command counts (a queue of 1000); SET_CONDITION sets the
 //             display condition (display_condition.h; a bad index is a counted error).
 // Publishes:  BL_ROUND (round_t) on every change and once a second;
@@ -43,6 +45,7 @@
 #include "bricklayer/projection/display.h"
 #include "bricklayer/projection/game_renderer.h"
 #include "bricklayer/projection/input_watch.h"
+#include "bricklayer/projection/problem_outline.h"
 #include "bricklayer/projection/projection_config.h"
 #include "bricklayer/projection/red_debounce.h"
 #include "bricklayer/projection/round_referee.h"
@@ -67,7 +70,8 @@ class ProjectionNode final : public runtime::Node {
       "and end after --round-seconds or when the board stays empty; the board says \"camera not seeing\"\n"
       "or \"waiting for the other machine\" instead of a frozen verdict. Display conditions of the seed paper's\n"
       "study (--condition, command SET_CONDITION, key C): blue (always blue), red (all red while the pile\n"
-      "falls), proposed (the causes red, the default); a study session's instruction is shown. Keys: S start,\n"
+      "falls), proposed (the causes red, the default); a study session's instruction is shown, and the problem\n"
+      "being solved: a pile to build as outlines, a score to reach with the time left. Keys: S start,\n"
       "R reset, H hint, C next condition, D done (study), P snapshot, Esc/Q quit.";
 
   // Rules across fields (one display mode, state width within the image, snapshots need a folder).
@@ -80,6 +84,8 @@ class ProjectionNode final : public runtime::Node {
 
   bool quit_requested() const { return quit_; }
   Display& display() { return *display_; }
+  // Where the last game frame put its parts (text bounds, the problem's outlines).
+  const Layout& layout() const { return renderer_->layout(); }
   const Scene& scene() const { return scene_; }
   const RoundReferee& round() const { return round_; }
   InputProblem input_problem() const { return watch_.problem(now()); }
@@ -94,6 +100,10 @@ class ProjectionNode final : public runtime::Node {
   // How long the study session's instruction stays after its driver's last message: the driver publishes
   // once a second, so three missed messages mean it has gone.
   static constexpr int64_t kStudySessionHeardUs = 3'000'000;
+  // The study problem shown now (problem_outline.h): outlines, a target, or nothing.
+  ProblemView problem_view() const;
+  // Study problems refused as malformed (each also a counted error).
+  int64_t problems_rejected() const { return problems_rejected_; }
 
  protected:
   void tick() override;
@@ -113,6 +123,8 @@ class ProjectionNode final : public runtime::Node {
   void request_hint();
   void set_condition(DisplayCondition condition, const std::string& by);
   void on_study_session(const study_session_t& s);
+  void on_study_problem(const study_problem_t& p);
+  const study_session_t* heard_session() const;  // the newest session, if heard within kStudySessionHeardUs
   void send_done();
   bool awaiting_prediction() const;
   void save_rounds();
@@ -163,6 +175,9 @@ class ProjectionNode final : public runtime::Node {
   int64_t study_session_utime_ = INT64_MIN;        // when it arrived (bus clock)
   std::optional<int8_t> study_condition_;          // the last session condition adopted
   std::string drawn_instruction_;
+  ProblemOutline study_problem_;
+  ProblemView drawn_problem_;
+  int64_t problems_rejected_ = 0;
   int64_t study_command_sequence_ = 0;
 };
 
