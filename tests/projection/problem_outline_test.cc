@@ -3,7 +3,8 @@
 // as outlines exactly at the blocks' mapped positions (on the outline, not inside, not just outside, not
 // far away), under a real block's verdict, gone when the problem is no longer republished or the session
 // ends; a score problem's target line counting down on the rig's clock (frozen while paused); malformed
-// problems counted and nothing drawn.
+// problems, and ones whose num_blocks disagrees with the blocks sent (which cannot decode), counted and
+// nothing drawn.
 #include <cmath>
 #include <limits>
 #include <vector>
