@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstring>
 
 using namespace bricklayer::vision;
 using bricklayer::detection::DetectedBlock;
@@ -106,4 +107,25 @@ TEST_CASE("the spread: the standard deviation of a block's recent measured x, st
   CHECK(out[0].spread_samples == 1);
   CHECK(out[0].spread == 0.0);
   CHECK_THROWS_WITH(filter.update(seen(-0.4), {0.001, 0.002}), Catch::Contains("2 uncertainties for 1 detections"));
+}
+
+TEST_CASE("the spread depends only on the recent measurements, to the bit, not on how many came before") {
+  // The same last kSpreadFrames measurements after histories one frame apart (a replay that sees a frame
+  // the live process dropped): the ring holds them at other positions, the spread must not notice.
+  auto last_spread = [](int extra) {
+    TemporalFilter f;
+    FilteredBlock last{};
+    for (int i = -extra; i < 40; ++i) {
+      const double x = 0.25 + 0.0013 * std::sin(1.7 * i) + 1e-7 * i;
+      const auto out = f.update({at(0, x)});
+      if (!out.empty()) last = out[0];
+    }
+    return last;
+  };
+  const FilteredBlock a = last_spread(0);
+  for (int extra = 1; extra < kSpreadFrames; ++extra) {
+    const FilteredBlock b = last_spread(extra);
+    REQUIRE(b.spread_samples == a.spread_samples);
+    CHECK(std::memcmp(&a.spread, &b.spread, sizeof(double)) == 0);
+  }
 }

@@ -24,11 +24,23 @@ void TemporalFilter::reset() {
   next_id_ = 0;
 }
 
+// The k-th oldest of a track's recent measurements. Sums run oldest first, never in the ring's storage
+// order: the same recent measurements then give the same bits whatever the ring's phase, which depends
+// on every frame since the track began (a replay that sees a frame the live process dropped long ago
+// would otherwise differ in the last bit).
+double TemporalFilter::recent_at(const Track& t, int k) {
+  return t.recent[static_cast<size_t>((t.recent_next - t.recent_count + k + kSpreadFrames) % kSpreadFrames)];
+}
+
+double TemporalFilter::recent_mean(const Track& t) {
+  double mean = 0;
+  for (int k = 0; k < t.recent_count; ++k) mean += recent_at(t, k);
+  return mean / t.recent_count;
+}
+
 void TemporalFilter::remember(Track& t, double x, double reset) {
   if (t.recent_count > 0) {
-    double mean = 0;
-    for (int k = 0; k < t.recent_count; ++k) mean += t.recent[static_cast<size_t>(k)];
-    mean /= t.recent_count;
+    const double mean = recent_mean(t);
     if (std::abs(x - mean) > reset) t.recent_count = 0, t.recent_next = 0;
   }
   t.recent[static_cast<size_t>(t.recent_next)] = x;
@@ -39,10 +51,9 @@ void TemporalFilter::remember(Track& t, double x, double reset) {
 FilteredBlock TemporalFilter::output(const Track& t) {
   FilteredBlock b{t.id, t.published, t.missed, t.lag, t.measured_uncertainty, 0.0, t.recent_count};
   if (t.recent_count >= 2) {
-    double mean = 0, ss = 0;
-    for (int k = 0; k < t.recent_count; ++k) mean += t.recent[static_cast<size_t>(k)];
-    mean /= t.recent_count;
-    for (int k = 0; k < t.recent_count; ++k) ss += (t.recent[static_cast<size_t>(k)] - mean) * (t.recent[static_cast<size_t>(k)] - mean);
+    const double mean = recent_mean(t);
+    double ss = 0;
+    for (int k = 0; k < t.recent_count; ++k) ss += (recent_at(t, k) - mean) * (recent_at(t, k) - mean);
     b.spread = std::sqrt(ss / (t.recent_count - 1));
   }
   return b;

@@ -71,6 +71,8 @@ class TemporalFilter {
   };
   static void remember(Track& track, double x, double reset);
   static FilteredBlock output(const Track& track);
+  static double recent_at(const Track& track, int k);  // the k-th oldest recent measurement
+  static double recent_mean(const Track& track);
   TemporalFilterConfig config_;
   std::vector<Track> tracks_;
   int64_t next_id_ = 0;
