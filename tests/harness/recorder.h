@@ -50,6 +50,15 @@ class Recorder {
     return out;
   }
 
+  // The newest message recorded on channel that decodes as T (the state a peer shows now).
+  template <typename T>
+  std::optional<T> newest(const std::string& channel) const {
+    for (auto it = messages_.rbegin(); it != messages_.rend(); ++it)
+      if (it->channel == channel)
+        if (auto msg = runtime::decode<T>(it->bytes)) return msg;
+    return std::nullopt;
+  }
+
   // The first message recorded on channel (from the start of the recording) that decodes as T and
   // satisfies pred, pumping until it arrives or timeout passes.
   template <typename T>

@@ -6,30 +6,27 @@
 // contradicts when the piles are moved -0.02..+0.02.
 #include <catch2/catch.hpp>
 
-#include <unistd.h>
-
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <map>
 
-#include "../common/spawn_util.h"
 #include "bricklayer/common/channels.h"
-#include "bricklayer/common/module.h"
 #include "bricklayer/core/predict.h"
 #include "bricklayer/prediction/prediction_logic.h"
 #include "bricklayer/prediction_t.hpp"
+#include "bricklayer/runtime/lcm_bus.h"
 #include "bricklayer/stack_t.hpp"
+#include "harness/live_bus.h"
+#include "harness/program.h"
+#include "harness/recorder.h"
+#include "harness/scratch.h"
 
 using namespace bricklayer;
-namespace fs = std::filesystem;
+using namespace std::chrono_literals;
 
 namespace {
-
-constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 // Keyframes, 3 s each (x = left ends, block lengths from the edge). The optimum is Ainley's 4-block stack
 // (tests/data/optimal-stacks.json); the harmonic stack's top block reaches 25/24. The last pile is the
@@ -51,39 +48,52 @@ core::Stack to_core(const bricklayer::stack_t& s) {
   return c;
 }
 
+// What a run through simcam, vision and prediction produced, by frame number.
+struct Run {
+  std::map<int64_t, bricklayer::stack_t> truth, measured;
+  std::map<int64_t, prediction_t> predictions;
+};
+
+// Starts prediction and vision, waits for their heartbeats (they are subscribed then), plays the
+// scenario through simcam to its end (at most `max`) and collects what came out.
+Run run_pipeline(const std::string& scenario, std::chrono::seconds max) {
+  harness::ScratchDir dir("knife-edge");
+  harness::write_file(dir / "scenario.json", scenario);
+  Run run;
+  runtime::LcmBus bus(harness::kLiveUrl);
+  const auto keep = runtime::QueuePolicy::keep(100000);
+  bus.subscribe(channel(kTruthChannel), keep, [&](const runtime::Received& r) {
+    if (auto s = runtime::decode<bricklayer::stack_t>(r.data, r.size)) run.truth[s->frame_number] = *s;
+  });
+  bus.subscribe(channel(kStackChannel), keep, [&](const runtime::Received& r) {
+    if (auto s = runtime::decode<bricklayer::stack_t>(r.data, r.size)) run.measured[s->frame_number] = *s;
+  });
+  bus.subscribe(channel(kPredictionChannel), keep, [&](const runtime::Received& r) {
+    if (auto p = runtime::decode<prediction_t>(r.data, r.size)) run.predictions[p->frame_number] = *p;
+  });
+  harness::Recorder rec = harness::Recorder::live(bus, {channel(kHeartbeatChannel)});
+  harness::Program prediction("bricklayer-prediction", {"--lcm-url", harness::kLiveUrl});
+  harness::Program vision("bricklayer-vision", {"--lcm-url", harness::kLiveUrl});
+  REQUIRE(rec.wait_for_heartbeat("prediction", [&](const heartbeat_t& h) { return h.pid == prediction.pid(); }, 10s));
+  REQUIRE(rec.wait_for_heartbeat("vision", [&](const heartbeat_t& h) { return h.pid == vision.pid(); }, 10s));
+  harness::Program simcam("bricklayer-simcam", {"--scenario", (dir / "scenario.json").string(), "--fps", "15",
+                                                "--no-projector", "--lcm-url", harness::kLiveUrl});
+  const bool simcam_done = rec.wait_until([&] { return !simcam.running(); }, max);
+  // The last frames are still on their way through vision and prediction.
+  rec.pump_for(500ms);
+  if (!simcam_done) simcam.stop();
+  CHECK(vision.stop().clean());
+  CHECK(prediction.stop().clean());
+  return run;
+}
+
 }  // namespace
 
 TEST_CASE("zero-margin piles measured through simcam and vision stay blue, a real overhang is still red") {
-  const fs::path dir = fs::temp_directory_path() / ("bricklayer-knife-edge-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  std::ofstream(dir / "scenario.json") << kScenario;
-
-  Module m("test", kUrl);
-  std::map<int64_t, bricklayer::stack_t> truth, measured;
-  std::map<int64_t, prediction_t> predictions;
-  m.subscribe<bricklayer::stack_t>(channel(kTruthChannel), [&](const bricklayer::stack_t& s) { truth[s.frame_number] = s; });
-  m.subscribe<bricklayer::stack_t>(channel(kStackChannel), [&](const bricklayer::stack_t& s) { measured[s.frame_number] = s; });
-  m.subscribe<prediction_t>(channel(kPredictionChannel), [&](const prediction_t& p) { predictions[p.frame_number] = p; });
-  const pid_t prediction = test::spawn({test::program("bricklayer-prediction"), "--lcm-url", kUrl});
-  const pid_t vision = test::spawn({test::program("bricklayer-vision"), "--lcm-url", kUrl});
-  usleep(500000);
-  const pid_t simcam = test::spawn({test::program("bricklayer-simcam"), "--scenario", (dir / "scenario.json").string(),
-                                    "--fps", "15", "--no-projector", "--lcm-url", kUrl});
-  auto end = std::chrono::steady_clock::now() + std::chrono::seconds(25);
-  bool simcam_done = false;
-  while (std::chrono::steady_clock::now() < end) {
-    m.lcm().handleTimeout(20);
-    int status = 0;
-    if (!simcam_done && waitpid(simcam, &status, WNOHANG) == simcam) {
-      simcam_done = true;
-      end = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
-    }
-  }
-  if (!simcam_done) test::stop(simcam);
-  CHECK(test::stop(vision) == 0);
-  CHECK(test::stop(prediction) == 0);
-  fs::remove_all(dir);
+  const Run run = run_pipeline(kScenario, 25s);
+  const auto& truth = run.truth;
+  const auto& measured = run.measured;
+  const auto& predictions = run.predictions;
 
   // Settled frames: the true stack has not changed for the last 8 frames (vision's temporal filter
   // confirms a change within a few frames).
@@ -163,35 +173,9 @@ TEST_CASE("optima and harmonic stacks moved -0.02..+0.02: no settled frame shows
   }
   const std::string scenario = "{\"nuisance\": \"mild\", \"seed\": 12, \"duration_s\": " + std::to_string(1.5 * index) +
                                ", \"keyframes\": [" + keys + "]}";
-  const fs::path dir = fs::temp_directory_path() / ("bricklayer-knife-moves-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  std::ofstream(dir / "scenario.json") << scenario;
-
-  Module m("test", kUrl);
-  std::map<int64_t, bricklayer::stack_t> truth;
-  std::map<int64_t, prediction_t> predictions;
-  m.subscribe<bricklayer::stack_t>(channel(kTruthChannel), [&](const bricklayer::stack_t& s) { truth[s.frame_number] = s; });
-  m.subscribe<prediction_t>(channel(kPredictionChannel), [&](const prediction_t& p) { predictions[p.frame_number] = p; });
-  const pid_t prediction = test::spawn({test::program("bricklayer-prediction"), "--lcm-url", kUrl});
-  const pid_t vision = test::spawn({test::program("bricklayer-vision"), "--lcm-url", kUrl});
-  usleep(500000);
-  const pid_t simcam = test::spawn({test::program("bricklayer-simcam"), "--scenario", (dir / "scenario.json").string(),
-                                    "--fps", "15", "--no-projector", "--lcm-url", kUrl});
-  auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  bool simcam_done = false;
-  while (std::chrono::steady_clock::now() < end) {
-    m.lcm().handleTimeout(20);
-    int status = 0;
-    if (!simcam_done && waitpid(simcam, &status, WNOHANG) == simcam) {
-      simcam_done = true;
-      end = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
-    }
-  }
-  if (!simcam_done) test::stop(simcam);
-  CHECK(test::stop(vision) == 0);
-  CHECK(test::stop(prediction) == 0);
-  fs::remove_all(dir);
+  const Run run = run_pipeline(scenario, 60s);
+  const auto& truth = run.truth;
+  const auto& predictions = run.predictions;
 
   // Per (pile, move): settled frames shown stable / knife edge / falls.
   std::map<std::pair<std::string, double>, std::array<int, 3>> shown;

@@ -5,34 +5,33 @@
 // score as MAX, RESET -> IDLE. Malformed messages are counted errors; SIGTERM ends it cleanly.
 #include <catch2/catch.hpp>
 
-#include <unistd.h>
-
 #include <chrono>
-#include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <optional>
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "../common/spawn_util.h"
 #include "bricklayer/command_t.hpp"
 #include "bricklayer/common/channels.h"
-#include "bricklayer/common/module.h"
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/prediction_t.hpp"
 #include "bricklayer/board/board_to_projector.h"
 #include "bricklayer/projection/game_renderer.h"
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/round_t.hpp"
+#include "bricklayer/runtime/lcm_bus.h"
 #include "bricklayer/stack_t.hpp"
+#include "harness/live_bus.h"
+#include "harness/program.h"
+#include "harness/recorder.h"
+#include "harness/scratch.h"
 
 using namespace bricklayer;
+using namespace std::chrono_literals;
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 bricklayer::stack_t pile(int64_t frame, double right_x) {
   bricklayer::stack_t s{};
@@ -73,29 +72,26 @@ prediction_t verdict(int64_t frame, bool balanced, int score) {
   return p;
 }
 
-struct Bus {
-  Module m{"test", kUrl};
-  std::optional<projector_state_t> state;
-  std::optional<round_t> round;
-  std::optional<heartbeat_t> heartbeat;
-  Bus() {
-    m.subscribe<projector_state_t>(channel(kProjectorChannel), [this](const projector_state_t& s) { state = s; });
-    m.subscribe<round_t>(channel(kRoundChannel), [this](const round_t& r) { round = r; });
-    m.subscribe<heartbeat_t>(channel(kHeartbeatChannel), [this](const heartbeat_t& h) {
-      if (h.module == "projection") heartbeat = h;
-    });
-  }
+// The test's side of the bus: what projection shows now (its newest state, round and heartbeat).
+struct Peer {
+  runtime::LcmBus bus{harness::kLiveUrl};
+  harness::Recorder rec = harness::Recorder::live(
+      bus, {channel(kProjectorChannel), channel(kRoundChannel), channel(kHeartbeatChannel)});
+
+  std::optional<projector_state_t> state() const { return rec.newest<projector_state_t>(channel(kProjectorChannel)); }
+  std::optional<round_t> round() const { return rec.newest<round_t>(channel(kRoundChannel)); }
+  std::optional<heartbeat_t> heartbeat() const { return rec.last_heartbeat("projection"); }
   // Handles messages until done() or the timeout; returns done().
-  bool until(const std::function<bool()>& done, int timeout_ms) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
-    while (!done() && std::chrono::steady_clock::now() < end) m.lcm().handleTimeout(20);
-    return done();
+  bool until(const std::function<bool()>& done, std::chrono::milliseconds timeout) { return rec.wait_until(done, timeout); }
+  template <typename T>
+  void send(const char* name, const T& msg) {
+    REQUIRE(harness::publish(bus, channel(name), msg));
   }
   void command(int32_t which, int64_t sequence) {
     command_t c{};
     c.command = which;
     c.sequence = sequence;
-    m.publish(channel(kCommandChannel), c);
+    send(kCommandChannel, c);
   }
 };
 
@@ -110,34 +106,34 @@ cv::Vec3b centre_pixel(const cv::Mat& frame, int row, double x) {
 }  // namespace
 
 TEST_CASE("bricklayer-projection draws what it is told, runs rounds and survives bad input") {
-  const fs::path dir = fs::temp_directory_path() / ("bricklayer-projection-process-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  setenv("SDL_AUDIODRIVER", "dummy", 1);  // inherited by the child: no sound card here
-  Bus bus;
-  const pid_t projection = test::spawn({test::program("bricklayer-projection"), "--headless", "--lcm-url", kUrl,
-                                        "--round-seconds", "2", "--snapshot-dir", dir.string()});
-  REQUIRE(bus.until([&] { return bus.heartbeat.has_value(); }, 10000));
+  harness::ScratchDir dir("projection-process");
+  Peer peer;
+  harness::Program projection("bricklayer-projection",
+                              {"--headless", "--lcm-url", harness::kLiveUrl, "--round-seconds", "2", "--snapshot-dir",
+                               dir.str()},
+                              harness::ProgramOptions{{"SDL_AUDIODRIVER=dummy"}, ""});  // no sound card here
+  REQUIRE(peer.until([&] { return peer.heartbeat().has_value(); }, 10s));
 
   // A standing pile, then the same pile with its top block too far out.
-  bus.m.publish(channel(kStackChannel), pile(10, -0.7));
-  bus.m.publish(channel(kPredictionChannel), verdict(10, true, 30));
-  REQUIRE(bus.until([&] { return bus.state && bus.state->frame_number == 10; }, 5000));
-  CHECK(bus.state->mode == projector_state_t::MODE_GAME);
+  peer.send(kStackChannel, pile(10, -0.7));
+  peer.send(kPredictionChannel, verdict(10, true, 30));
+  REQUIRE(peer.until([&] { return peer.state() && peer.state()->frame_number == 10; }, 5s));
+  CHECK(peer.state()->mode == projector_state_t::MODE_GAME);
 
-  bus.command(command_t::START_ROUND, 1);
-  REQUIRE(bus.until([&] { return bus.round && bus.round->state == round_t::STATE_RUNNING; }, 3000));
-  CHECK(bus.round->duration_ms == 2000);
-  CHECK(bus.round->score == 30);
-  CHECK(bus.round->num_blocks == 2);
+  peer.command(command_t::START_ROUND, 1);
+  REQUIRE(peer.until([&] { return peer.round() && peer.round()->state == round_t::STATE_RUNNING; }, 3s));
+  const round_t running = *peer.round();
+  CHECK(running.duration_ms == 2000);
+  CHECK(running.score == 30);
+  CHECK(running.num_blocks == 2);
 
-  bus.m.publish(channel(kStackChannel), pile(11, 0.1));
-  bus.m.publish(channel(kPredictionChannel), verdict(11, false, 110));
-  REQUIRE(bus.until([&] { return bus.state && bus.state->frame_number == 11; }, 5000));
-  bus.command(command_t::SNAPSHOT, 2);
+  peer.send(kStackChannel, pile(11, 0.1));
+  peer.send(kPredictionChannel, verdict(11, false, 110));
+  REQUIRE(peer.until([&] { return peer.state() && peer.state()->frame_number == 11; }, 5s));
+  peer.command(command_t::SNAPSHOT, 2);
+  // Snapshots are written to a temporary name and renamed: once the file is there, it is whole.
   const fs::path shot = dir / "snapshot-0001.png";
-  REQUIRE(bus.until([&] { return fs::exists(shot) && fs::file_size(shot) > 0; }, 5000));
-  usleep(200000);  // the file is written in one call; give it a moment to be complete on disk
+  REQUIRE(peer.until([&] { return fs::exists(shot); }, 5s));
   const cv::Mat frame = cv::imread(shot.string(), cv::IMREAD_COLOR);
   REQUIRE(frame.size() == cv::Size(1024, 768));
   const cv::Vec3b bottom = centre_pixel(frame, 0, -0.8), top = centre_pixel(frame, 1, 0.1);
@@ -151,22 +147,21 @@ TEST_CASE("bricklayer-projection draws what it is told, runs rounds and survives
   CHECK(cv::countNonZero(channels[1]) == 0);  // only red and blue light (green leaks into the camera)
 
   // Time runs out: MAX is the best balanced score of the round (30), not the unbalanced 110.
-  REQUIRE(bus.until([&] { return bus.round && bus.round->state == round_t::STATE_ENDED; }, 5000));
-  CHECK(bus.round->max_score == 30);
-  CHECK(bus.round->remaining_ms == 0);
-  bus.command(command_t::RESET_ROUND, 3);
-  REQUIRE(bus.until([&] { return bus.round && bus.round->state == round_t::STATE_IDLE; }, 3000));
+  REQUIRE(peer.until([&] { return peer.round() && peer.round()->state == round_t::STATE_ENDED; }, 5s));
+  CHECK(peer.round()->max_score == 30);
+  CHECK(peer.round()->remaining_ms == 0);
+  peer.command(command_t::RESET_ROUND, 3);
+  REQUIRE(peer.until([&] { return peer.round() && peer.round()->state == round_t::STATE_IDLE; }, 3s));
 
   // Garbage on its inputs is counted, and it keeps drawing.
-  const int64_t errors_before = bus.heartbeat->errors;
+  const int64_t errors_before = peer.heartbeat()->errors;
   const std::vector<uint8_t> junk(37, 0xAB);
   for (const char* ch : {kStackChannel, kPredictionChannel, kCommandChannel, kCalibrationChannel})
-    bus.m.lcm().publish(channel(ch), junk.data(), static_cast<unsigned>(junk.size()));
-  REQUIRE(bus.until([&] { return bus.heartbeat->errors >= errors_before + 4; }, 4000));
-  bus.m.publish(channel(kStackChannel), pile(12, -0.7));
-  bus.m.publish(channel(kPredictionChannel), verdict(12, true, 30));
-  CHECK(bus.until([&] { return bus.state && bus.state->frame_number == 12; }, 5000));
+    REQUIRE(harness::publish_bytes(peer.bus, channel(ch), junk));
+  REQUIRE(peer.until([&] { return peer.heartbeat()->errors >= errors_before + 4; }, 4s));
+  peer.send(kStackChannel, pile(12, -0.7));
+  peer.send(kPredictionChannel, verdict(12, true, 30));
+  CHECK(peer.until([&] { return peer.state() && peer.state()->frame_number == 12; }, 5s));
 
-  CHECK(test::stop(projection) == 0);
-  fs::remove_all(dir);
+  CHECK(projection.stop().clean());
 }

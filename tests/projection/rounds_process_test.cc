@@ -11,7 +11,6 @@
 #include <chrono>
 #include <functional>
 #include <optional>
-#include <thread>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -19,20 +18,20 @@
 #include "bricklayer/board/board_to_projector.h"
 #include "bricklayer/command_t.hpp"
 #include "bricklayer/common/channels.h"
-#include "bricklayer/common/module.h"
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/prediction_t.hpp"
 #include "bricklayer/round_t.hpp"
+#include "bricklayer/runtime/lcm_bus.h"
 #include "bricklayer/stack_t.hpp"
+#include "harness/live_bus.h"
 #include "harness/program.h"
+#include "harness/recorder.h"
 #include "harness/scratch.h"
 
 using namespace bricklayer;
 using namespace std::chrono_literals;
 
 namespace {
-
-constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 // The board as vision would send it: empty, or a two-block pile (balanced, or its top block the cause).
 struct Board {
@@ -41,7 +40,8 @@ struct Board {
 };
 
 struct Exhibit {
-  Module m{"test", kUrl};
+  runtime::LcmBus bus{harness::kLiveUrl};
+  // What projection showed since the last forget(): its newest round and heartbeat.
   std::optional<round_t> round;
   std::optional<heartbeat_t> heartbeat;
   int64_t frame = 100;
@@ -50,16 +50,19 @@ struct Exhibit {
   bool send_predictions = true;
 
   Exhibit() {
-    m.subscribe<round_t>(channel(kRoundChannel), [this](const round_t& r) { round = r; });
-    m.subscribe<heartbeat_t>(channel(kHeartbeatChannel), [this](const heartbeat_t& h) {
-      if (h.module == "projection") heartbeat = h;
+    bus.subscribe(channel(kRoundChannel), runtime::QueuePolicy::keep(1000), [this](const runtime::Received& r) {
+      if (auto m = runtime::decode<round_t>(r.data, r.size)) round = *m;
+    });
+    bus.subscribe(channel(kHeartbeatChannel), runtime::QueuePolicy::keep(1000), [this](const runtime::Received& r) {
+      auto h = runtime::decode<heartbeat_t>(r.data, r.size);
+      if (h && h->module == "projection") heartbeat = *h;
     });
   }
 
   void send() {
     ++frame;
     bricklayer::stack_t s{};
-    s.utime = wall_utime();
+    s.utime = bus.now_utime();
     s.frame_number = frame;
     s.block_length = 1;
     s.block_height = 1.0 / 3.0;
@@ -90,8 +93,8 @@ struct Exhibit {
     }
     s.num_blocks = static_cast<int32_t>(s.blocks.size());
     p.num_blocks = static_cast<int32_t>(p.blocks.size());
-    if (send_stacks) m.publish(channel(kStackChannel), s);
-    if (send_predictions) m.publish(channel(kPredictionChannel), p);
+    if (send_stacks) REQUIRE(harness::publish(bus, channel(kStackChannel), s));
+    if (send_predictions) REQUIRE(harness::publish(bus, channel(kPredictionChannel), p));
   }
 
   // Sends the board at 20 Hz and handles what comes back until done() or the timeout; returns done().
@@ -103,7 +106,7 @@ struct Exhibit {
         send();
         next += 50ms;
       }
-      m.lcm().handleTimeout(10);
+      bus.handle(10);
     }
     return done();
   }
@@ -121,7 +124,7 @@ struct Exhibit {
 
 harness::Program start_projection(const harness::ScratchDir& dir) {
   return harness::Program("bricklayer-projection",
-                          {"--headless", "--lcm-url", kUrl, "--mute", "--snapshot-dir", (dir / "shots").string(),
+                          {"--headless", "--lcm-url", harness::kLiveUrl, "--mute", "--snapshot-dir", (dir / "shots").string(),
                            "--rounds-file", (dir / "rounds.json").string(), "--round-seconds", "30",
                            "--round-start-hold", "0.5", "--round-arm-empty", "0.3", "--round-end-empty", "1.5",
                            "--stale-seconds", "1"},
@@ -193,14 +196,14 @@ TEST_CASE("rounds run themselves and survive restarts, and stale inputs are show
   ex.run_for(600ms);
   ex.send_stacks = ex.send_predictions = false;
   REQUIRE(ex.until([&] { return ex.heartbeat->status.find("camera not seeing") != std::string::npos; }, 5s));
-  ex.m.publish(channel(kCommandChannel), [] {
+  REQUIRE(harness::publish(ex.bus, channel(kCommandChannel), [] {
     command_t c{};
     c.command = command_t::SNAPSHOT;
     return c;
-  }());
+  }()));
+  // Snapshots are written to a temporary name and renamed: once the file is there, it is whole.
   const auto shot = dir / "shots" / "snapshot-0001.png";
   REQUIRE(ex.until([&] { return std::filesystem::exists(shot); }, 5s));
-  std::this_thread::sleep_for(200ms);
   const cv::Mat frame = cv::imread(shot.string(), cv::IMREAD_COLOR);
   REQUIRE_FALSE(frame.empty());
   const board::Point2 top = board::BoardToProjector{}.map(-0.7 + 0.5, 1.5 / 3.0);
