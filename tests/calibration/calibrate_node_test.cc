@@ -8,8 +8,13 @@
 // empty board; without a projector the run fails
 // after exactly twice --timeout of bus time with a counted error naming what is missing; the same
 // run twice writes the same file byte for byte, and so does the node alone replaying the recorded
-// run on the log bus (twice, and the same as the live run).
+// run on the log bus (twice, and the same as the live run). --serve runs the same calibration on the
+// command CALIBRATE once the board has been empty --empty-for seconds (it waits while blocks are on
+// it, and gives up after --calibrate-wait), saves and serves it, or keeps the old one when it is
+// rejected.
 #include <catch2/catch.hpp>
+
+#include <algorithm>
 
 #include <nlohmann/json.hpp>
 
@@ -19,6 +24,7 @@
 #include "bricklayer/calibration/calibrate_node.h"
 #include "bricklayer/calibration_t.hpp"
 #include "bricklayer/command_t.hpp"
+#include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/projection/projection_node.h"
 #include "bricklayer/runtime/log_bus.h"
@@ -370,6 +376,160 @@ TEST_CASE("the calibrate node serves its file and self-checks on command only wh
   CHECK(*harness::heartbeat_value(node.heartbeat(), "drift_px") < 1.0);
   CHECK(node.status() == "ok");
   CHECK_FALSE(node.finished());  // --serve never finishes by itself
+}
+
+namespace {
+bricklayer::stack_t board_with(int blocks) {
+  bricklayer::stack_t s{};
+  s.status = bricklayer::stack_t::STATUS_OK;
+  s.num_blocks = blocks;
+  s.blocks.resize(blocks);
+  return s;
+}
+
+command_t calibrate_command() {
+  command_t c{};
+  c.command = command_t::CALIBRATE;
+  c.sequence = 1;
+  c.argument = "bricklayer-status";
+  return c;
+}
+
+int patterns_shown(const std::vector<command_t>& commands) {
+  int n = 0;
+  for (const command_t& c : commands) n += c.command == command_t::SHOW_PATTERN;
+  return n;
+}
+
+// The latest heartbeat value of the calibrate node on the recorded heartbeats (what the status page reads).
+std::optional<double> published_value(harness::Recorder& rec, const std::string& name) {
+  const auto beats = rec.all<heartbeat_t>(kHeartbeats);
+  for (auto it = beats.rbegin(); it != beats.rend(); ++it)
+    if (it->module == "calibrate") return harness::heartbeat_value(*it, name);
+  return std::nullopt;
+}
+}  // namespace
+
+TEST_CASE("the serving calibrate node calibrates on CALIBRATE once the board has been empty --empty-for s, saves and serves the new one") {
+  harness::ScratchDir dir("calibrate-node-serve-calibrate");
+  CalibrateConfig config = calibrate_config(dir / "calibration.json");
+  // Served until the command: the uncalibrated default (a projector mounted otherwise than assumed).
+  board::save_calibration(config.output, board::default_calibration());
+  const std::string old_file = harness::read_file(config.output);
+  config.serve = true;
+  config.republish = 1;
+  config.empty_for = 1;
+  config.calibrate_wait = 3;
+  harness::Rig rig(kStepUs);
+  rig.add<simcam::SimcamNode>(camera_config(empty_scenario(dir), kSetupSeed));
+  rig.add<projection::ProjectionNode>(projector_config());
+  auto& rec = rig.record({kCommands, kCalibrations, kHeartbeats});
+  auto& node = rig.add<CalibrateNode>(config);
+  const std::string stacks = channel(kStackChannel);
+  rig.run_for(200ms);
+
+  // Blocks on the board: the command waits; a second one is counted, not queued; after --calibrate-wait
+  // it is dropped, said, and nothing was shown or written.
+  rig.publish(stacks, board_with(2));
+  rig.publish(kCommands, calibrate_command());
+  rig.run_for(500ms);
+  CHECK(node.status() == "calibration waits for an empty board: clear the board (at most 3 s)");
+  rig.publish(kCommands, calibrate_command());
+  rig.run_for(100ms);
+  CHECK(node.calibrate_commands_ignored() == 1);
+  rig.run_for(3s);
+  CHECK(patterns_shown(rec.all<command_t>(kCommands)) == 0);
+  CHECK(node.status() ==
+        "calibration not started: the board was not empty for 1 s within 3 s; clear the board and ask again; still "
+        "serving the previous calibration");
+  CHECK(node.calibrations_failed() == 1);
+  CHECK(harness::read_file(config.output) == old_file);
+
+  // The board empty: the calibration starts only once it has been empty for --empty-for (1 s of bus time).
+  rig.publish(stacks, board_with(0));
+  rig.run_for(100ms);
+  rig.publish(kCommands, calibrate_command());
+  const int64_t asked = rig.now();
+  rig.run_for(700ms);
+  CHECK(patterns_shown(rec.all<command_t>(kCommands)) == 0);
+  CHECK(node.status() == "calibration asked: waiting for the board to be empty for 1 s");
+  REQUIRE(rig.run_until([&] { return patterns_shown(rec.all<command_t>(kCommands)) > 0; }, 1s));
+  CHECK(rig.now() - asked <= 1'000'000);  // empty since 100 ms before the command
+  CHECK(node.status().rfind("calibrating: step 1 of 6: ", 0) == 0);
+  // Asked again while it runs: counted, not run twice.
+  rig.publish(kCommands, calibrate_command());
+  const int64_t started = rig.now();
+  REQUIRE(rig.run_until([&] { return node.calibrations_done() + node.calibrations_failed() > 1; }, 60s));
+  const int64_t took = rig.now() - started;
+  INFO("status " << node.status() << "; the patterns took " << took / 1000 << " ms of bus time");
+  CHECK(node.calibrations_done() == 1);
+  CHECK(node.calibrate_commands_ignored() == 2);
+  CHECK(node.status() == "ok");
+  CHECK_FALSE(node.finished());
+  const auto commands = rec.all<command_t>(kCommands);
+  CHECK(patterns_shown(commands) == 6);  // the default mode's six patterns, once each
+  CHECK(commands.back().command == command_t::CLEAR_PATTERN);
+
+  // Saved, within the one-off run's bounds and simcam's truth, and served from then on.
+  const std::string new_file = harness::read_file(config.output);
+  REQUIRE(new_file != old_file);
+  const calibration_t saved = board::load_calibration(config.output);
+  INFO("reprojection error mean " << saved.reprojection_error_mean_px << " px, max " << saved.reprojection_error_max_px);
+  CHECK(saved.reprojection_error_mean_px <= config.max_error_px);
+  CHECK(saved.reprojection_error_max_px <= config.max_point_error_px);
+  const double worst = max_mapping_error(saved, kSetupSeed);
+  INFO("max mapping error against simcam's truth " << worst << " projector px");
+  CHECK(worst < 1.5);
+  CHECK(max_mapping_error(board::default_calibration(), kSetupSeed) > 1.5);  // the old one was off
+  REQUIRE(node.calibration());
+  CHECK(runtime::encode(*node.calibration()) == runtime::encode(saved));
+  REQUIRE_FALSE(rec.all<calibration_t>(kCalibrations).empty());
+  CHECK(runtime::encode(rec.all<calibration_t>(kCalibrations).back()) == runtime::encode(saved));
+  rig.run_for(2100ms);  // republished (the file is its own write, not re-read as a change) and heartbeats
+  CHECK(runtime::encode(rec.all<calibration_t>(kCalibrations).back()) == runtime::encode(saved));
+  CHECK(harness::read_file(config.output) == new_file);
+  CHECK(published_value(rec, "calibrations_done") == 1.0);
+  CHECK(published_value(rec, "calibrate_commands_ignored") == 2.0);
+  // The served calibration's age on the bus clock at the heartbeat.
+  const auto beats = rec.all<heartbeat_t>(kHeartbeats);
+  const auto last = std::find_if(beats.rbegin(), beats.rend(), [](const heartbeat_t& hb) { return hb.module == "calibrate"; });
+  REQUIRE(last != beats.rend());
+  const std::optional<double> age = harness::heartbeat_value(*last, "calibration_age_s");
+  REQUIRE(age);
+  CHECK(*age > 0);
+  CHECK(*age == Approx(static_cast<double>(last->utime - saved.utime) / 1e6).margin(1e-6));
+}
+
+TEST_CASE("the serving calibrate node: a calibration on CALIBRATE that is rejected keeps serving the old one and says why") {
+  harness::ScratchDir dir("calibrate-node-serve-rejected");
+  CalibrateConfig config = calibrate_config(dir / "calibration.json");
+  std::filesystem::copy_file(calibrated_file(), config.output);
+  const std::string old_file = harness::read_file(config.output);
+  const calibration_t old_calibration = board::load_calibration(config.output);
+  config.serve = true;
+  config.republish = 1;
+  config.empty_for = 0.5;
+  config.max_error_px = 0.01;  // no real fit is this good: the computation rejects it
+  harness::Rig rig(kStepUs);
+  rig.add<simcam::SimcamNode>(camera_config(empty_scenario(dir), kSetupSeed));
+  rig.add<projection::ProjectionNode>(projector_config());
+  auto& rec = rig.record({kCommands, kCalibrations});
+  auto& node = rig.add<CalibrateNode>(config);
+  rig.publish(channel(kStackChannel), board_with(0));
+  rig.publish(kCommands, calibrate_command());
+  REQUIRE(rig.run_until([&] { return node.calibrations_failed() > 0; }, 60s));
+  INFO("status " << node.status());
+  CHECK(node.calibrations_done() == 0);
+  CHECK(patterns_shown(rec.all<command_t>(kCommands)) == 6);
+  CHECK(node.status().rfind("calibration rejected (reprojection error too high): mean reprojection error ", 0) == 0);
+  CHECK(node.status().find("; still serving the previous calibration") != std::string::npos);
+  CHECK(node.counters().errors == 1);
+  CHECK_FALSE(node.finished());
+  rig.run_for(1100ms);
+  CHECK(harness::read_file(config.output) == old_file);
+  REQUIRE(node.calibration());
+  CHECK(runtime::encode(*node.calibration()) == runtime::encode(old_calibration));
+  CHECK(runtime::encode(rec.all<calibration_t>(kCalibrations).back()) == runtime::encode(old_calibration));
 }
 
 TEST_CASE("without a projector the calibrate node fails after twice --timeout of bus time with a counted error") {

@@ -259,13 +259,7 @@ CalibrateNode::CalibrateNode(const Config& config, runtime::Bus& bus)
   subscribe<command_t>(command_channel_, runtime::QueuePolicy::keep(100), [this](const command_t& c) { on_command(c); });
   subscribe<stack_t>(channel(kStackChannel), runtime::QueuePolicy::newest(), [this](const stack_t& s) { on_stack(s); });
   if (mode_ == Mode::kCalibrate) {
-    capture_ = std::make_unique<PatternCapture>(
-        calibration_steps(options_), config_, options_.projector_size, [this] { return next_sequence(); },
-        [this](const command_t& c, const std::string& status) {
-          set_status(status);
-          publish(command_channel_, c);
-        },
-        [this](const std::string& kind, const std::string& message) { error(kind, message); });
+    start_calibration();
   } else if (mode_ == Mode::kSelfCheck) {
     start_self_check();
   }
@@ -300,19 +294,25 @@ void CalibrateNode::on_image(const image_t& m) {
 }
 
 void CalibrateNode::on_stack(const stack_t& s) {
+  stack_seen_ = true;
   const bool empty = s.status == stack_t::STATUS_OK && s.num_blocks == 0;
   if (empty && !board_empty_) empty_since_utime_ = now();
   board_empty_ = empty;
 }
 
 void CalibrateNode::on_command(const command_t& c) {
-  if (c.command != command_t::SELF_CHECK || mode_ != Mode::kServe) return;
+  if (mode_ != Mode::kServe) return;
+  if (c.command == command_t::CALIBRATE) {
+    on_calibrate_command();
+    return;
+  }
+  if (c.command != command_t::SELF_CHECK) return;
   if (!calibration_) {
     log::warn("SELF_CHECK ignored: no calibration to check yet (", config_.output, "); run bricklayer-calibrate");
     return;
   }
   if (capture_) {
-    log::warn("SELF_CHECK ignored: a self-check is already running");
+    log::warn("SELF_CHECK ignored: a ", capture_calibrates_ ? "calibration" : "self-check", " is already running");
     return;
   }
   if (!board_empty_) {
@@ -323,17 +323,80 @@ void CalibrateNode::on_command(const command_t& c) {
   start_self_check();
 }
 
-void CalibrateNode::start_self_check() {
-  last_check_utime_ = now();
-  log::info("self-check: projecting ", patterns::kMarkerSetSelfCheck == 2 ? "five" : "the", " check markers");
-  capture_ = std::make_unique<PatternCapture>(
-      std::vector<CalibrationStep>{{self_check_command(), "self-check markers"}}, config_, options_.projector_size,
-      [this] { return next_sequence(); },
-      [this](const command_t& c, const std::string& status) {
-        set_status(status);
+// A CALIBRATE command (--serve): it waits for the board to have been empty --empty-for seconds (tick);
+// one already waiting or running is not asked for twice.
+void CalibrateNode::on_calibrate_command() {
+  if (capture_ && capture_calibrates_) {
+    ++calibrate_ignored_;
+    log::warn("CALIBRATE ignored: a calibration is already running (", status(), ")");
+    return;
+  }
+  if (calibrate_asked_utime_) {
+    ++calibrate_ignored_;
+    log::warn("CALIBRATE ignored: a calibration already waits for the board to be empty");
+    return;
+  }
+  calibrate_asked_utime_ = now();
+  log::info("CALIBRATE: calibrating once the board has been empty for ", config_.empty_for, " s (waiting at most ",
+            config_.calibrate_wait, " s)");
+  set_status("calibration asked: waiting for the board to be empty for " + runtime::config_detail::to_text(config_.empty_for) +
+             " s");
+}
+
+void CalibrateNode::serve_calibrate_request(int64_t t) {
+  if (!calibrate_asked_utime_ || capture_) return;  // a self-check running finishes first
+  const int64_t ready = empty_since_utime_ + seconds_us(config_.empty_for);
+  if (board_empty_ && t >= ready) {
+    calibrate_asked_utime_.reset();
+    log::info("calibrating on command (board empty for ", config_.empty_for, " s)");
+    start_calibration();
+    return;
+  }
+  const int64_t give_up = *calibrate_asked_utime_ + seconds_us(config_.calibrate_wait);
+  if (t >= give_up) {
+    calibrate_asked_utime_.reset();
+    const std::string wait = runtime::config_detail::to_text(config_.calibrate_wait);
+    calibration_failed(
+        !stack_seen_ ? "calibration not started: no board state (stack_t on " + channel(kStackChannel) + ") within " + wait +
+                           " s, so the board is not known to be empty: is bricklayer-vision running with a calibration?"
+                     : "calibration not started: the board was not empty for " +
+                           runtime::config_detail::to_text(config_.empty_for) + " s within " + wait +
+                           " s; clear the board and ask again");
+    return;
+  }
+  if (!board_empty_)
+    set_status("calibration waits for an empty board: clear the board (at most " +
+               runtime::config_detail::to_text(config_.calibrate_wait) + " s)");
+  wake_at(board_empty_ ? std::min(ready, give_up) : give_up);
+}
+
+void CalibrateNode::calibration_failed(const std::string& why) {
+  ++calibrations_failed_;
+  log::warn(why);
+  set_status(why + (calibration_ ? "; still serving the previous calibration" : ""));
+}
+
+std::unique_ptr<CalibrateNode::PatternCapture> CalibrateNode::make_capture(std::vector<CalibrationStep> steps,
+                                                                         std::string status_prefix) {
+  return std::make_unique<PatternCapture>(
+      std::move(steps), config_, options_.projector_size, [this] { return next_sequence(); },
+      [this, status_prefix](const command_t& c, const std::string& status) {
+        set_status(status_prefix + status);
         publish(command_channel_, c);
       },
       [this](const std::string& kind, const std::string& message) { error(kind, message); });
+}
+
+void CalibrateNode::start_calibration() {
+  capture_calibrates_ = true;
+  capture_ = make_capture(calibration_steps(options_), mode_ == Mode::kServe ? "calibrating: " : "");
+}
+
+void CalibrateNode::start_self_check() {
+  last_check_utime_ = now();
+  log::info("self-check: projecting ", patterns::kMarkerSetSelfCheck == 2 ? "five" : "the", " check markers");
+  capture_calibrates_ = false;
+  capture_ = make_capture({{self_check_command(), "self-check markers"}}, "");
 }
 
 void CalibrateNode::clear_pattern() {
@@ -375,7 +438,9 @@ void CalibrateNode::tick() {
     }
     wake_at(scale_started_utime_ + 2 * seconds_us(config_.timeout) + 1);
   }
-  if (mode_ == Mode::kServe && calibration_ && !capture_ && config_.self_check_every > 0 && board_empty_) {
+  if (mode_ == Mode::kServe) serve_calibrate_request(t);
+  if (mode_ == Mode::kServe && calibration_ && !capture_ && !calibrate_asked_utime_ && config_.self_check_every > 0 &&
+      board_empty_) {
     const int64_t due = std::max(empty_since_utime_ + seconds_us(config_.empty_for),
                                  last_check_utime_ + seconds_us(config_.self_check_every));
     if (t >= due) {
@@ -393,6 +458,7 @@ void CalibrateNode::tick() {
     clear_pattern();
     capture_.reset();
     if (mode_ != Mode::kServe) finish(kExitRejected);
+    else if (capture_calibrates_) calibration_failed("calibration failed: " + capture_->failure());
     return;
   }
   if (const std::optional<int64_t> deadline = capture_->deadline()) wake_at(*deadline);
@@ -400,7 +466,7 @@ void CalibrateNode::tick() {
   std::vector<cv::Mat> frames = capture_->take_frames();
   capture_.reset();
   clear_pattern();
-  if (mode_ == Mode::kCalibrate) {
+  if (capture_calibrates_) {
     finish_calibration(frames);
   } else {
     finish_self_check(frames.front());
@@ -411,8 +477,17 @@ void CalibrateNode::finish_calibration(const std::vector<cv::Mat>& frames) {
   set_status("computing");
   log::info("computing the calibration from ", frames.size(), " frames");
   const CalibrationResult result = compute_calibration(frames, options_, now());
+  const bool serving = mode_ == Mode::kServe;
   if (result.status != CalibrationStatus::kOk) {
     error("rejected calibrations", result.message);
+    if (serving) {
+      // The computation's words say what to fix; they start "calibration rejected: " already.
+      const std::string prefix = "calibration rejected: ";
+      const bool has_prefix = result.message.rfind(prefix, 0) == 0;
+      calibration_failed(std::string("calibration rejected (") + to_string(result.status) +
+                         "): " + (has_prefix ? result.message.substr(prefix.size()) : result.message));
+      return;
+    }
     set_status(std::string("calibration rejected: ") + to_string(result.status));
     finish(kExitRejected);
     return;
@@ -422,17 +497,37 @@ void CalibrateNode::finish_calibration(const std::vector<cv::Mat>& frames) {
     board::save_calibration(config_.output, result.calibration);
   } catch (const std::exception& e) {
     error("unwritable calibration files", e.what());
+    if (serving) {
+      calibration_failed(std::string("calibration not saved: ") + e.what());
+      return;
+    }
     set_status(std::string("not saved: ") + e.what());
     finish(kExitRejected);
     return;
   }
   log::info("saved ", config_.output, "; publishing on ", calibration_channel_);
   calibration_ = result.calibration;
+  if (serving) {
+    // Our own write: the file is what is served already, not a change to re-read at the next republication.
+    file_time_ = file_time();
+    ++calibrations_done_;
+  }
   publish_calibration();
   set_value("reprojection_error_mean_px", result.calibration.reprojection_error_mean_px);
   set_value("reprojection_error_max_px", result.calibration.reprojection_error_max_px);
   set_status("ok");
-  finish(0);
+  if (!serving) finish(0);
+}
+
+void CalibrateNode::before_heartbeat() {
+  if (mode_ != Mode::kServe) return;
+  if (calibration_) {
+    set_value("calibration_age_s", static_cast<double>(now() - calibration_->utime) / 1e6);
+    set_value("reprojection_error_mean_px", calibration_->reprojection_error_mean_px);
+  }
+  set_value("calibrations_done", static_cast<double>(calibrations_done_));
+  set_value("calibrations_failed", static_cast<double>(calibrations_failed_));
+  set_value("calibrate_commands_ignored", static_cast<double>(calibrate_ignored_));
 }
 
 void CalibrateNode::finish_self_check(const cv::Mat& frame) {

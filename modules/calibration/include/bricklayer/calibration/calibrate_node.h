@@ -5,10 +5,11 @@
 //
 // Subscribes: BL_PROJECTOR (projector_state_t: which command the projector shows now),
 //             BL_IMAGE (image_t: camera frames), BL_STACK (stack_t: is the board empty, --serve),
-//             BL_COMMAND (command_t SELF_CHECK, --serve).
+//             BL_COMMAND (command_t SELF_CHECK and CALIBRATE, --serve).
 // Publishes:  BL_COMMAND (command_t SHOW_PATTERN / CLEAR_PATTERN, each with a fresh sequence number),
 //             BL_CALIBRATION (calibration_t), BL_HEARTBEAT (status "step k of n: ...", values drift_px,
-//             drift_max_px, reprojection_error_*, and the --scale-from-blocks figures).
+//             drift_max_px, reprojection_error_*, and the --scale-from-blocks figures; with --serve also
+//             calibration_age_s, calibrations_done, calibrations_failed, calibrate_commands_ignored).
 //
 // Modes:
 //   (default)     show every calibration pattern, compute, reject (exit 1) or save --output and
@@ -28,6 +29,11 @@
 //                 file is waited for, not fatal: the launcher starts --serve before anyone calibrated),
 //                 and run the self-check on every SELF_CHECK command while the board is empty (and
 //                 every --self-check-every seconds once the board has been empty --empty-for seconds).
+//                 On CALIBRATE (the operator's status page) it runs the default mode's calibration, the same
+//                 steps and computation, once the board has been empty --empty-for seconds (waiting at most
+//                 --calibrate-wait seconds for that); accepted, it saves --output and serves the new one;
+//                 rejected, it keeps serving the old one and says why in its status. A CALIBRATE while one
+//                 waits or runs is counted (calibrate_commands_ignored) and said, not queued again.
 // For every pattern: send SHOW_PATTERN, wait for projector_state_t echoing its sequence, then use the
 // camera frame received --skip-frames frames after the echo (frames already in flight show the
 // previous pattern). A step without echo or frame within --timeout seconds (bus clock) is sent once
@@ -70,6 +76,7 @@ struct CalibrateConfig {
   bool serve = false;
   double self_check_every = 0;
   double empty_for = 5;
+  double calibrate_wait = 60;
   bool write_default = false;
   bool scale_from_blocks = false;
   int scale_frames = 10;
@@ -113,7 +120,13 @@ struct CalibrateConfig {
                      "--serve: also self-check automatically this often, seconds, once the board has been empty "
                      "--empty-for seconds (0 = only on command)")
           .at_least(0));
-    v(runtime::param("empty-for", empty_for, "--serve: seconds of empty board before an automatic self-check").at_least(0));
+    v(runtime::param("empty-for", empty_for,
+                     "--serve: seconds of empty board before an automatic self-check or a commanded calibration")
+          .at_least(0));
+    v(runtime::param("calibrate-wait", calibrate_wait,
+                     "--serve: a CALIBRATE command waits at most this long, seconds, for the board to have been empty "
+                     "--empty-for seconds; then it is dropped and the status says why")
+          .above(0));
     v(runtime::param("write-default", write_default,
                      "write the uncalibrated default setup (modules/board) to --output and exit"));
     v(runtime::param("scale-from-blocks", scale_from_blocks,
@@ -172,6 +185,12 @@ class CalibrateNode final : public runtime::Node {
   int exit_code() const { return exit_code_; }
   // The calibration being served or checked (the one just computed after a calibration run).
   const std::optional<calibration_t>& calibration() const { return calibration_; }
+  // --serve: calibrations run on CALIBRATE and accepted; not done (rejected, failed, never started for
+  // want of an empty board); commands not obeyed because one was already waiting or running. The
+  // heartbeat carries them as calibrations_done, calibrations_failed, calibrate_commands_ignored.
+  int64_t calibrations_done() const { return calibrations_done_; }
+  int64_t calibrations_failed() const { return calibrations_failed_; }
+  int64_t calibrate_commands_ignored() const { return calibrate_ignored_; }
 
  protected:
   void tick() override;
@@ -189,6 +208,15 @@ class CalibrateNode final : public runtime::Node {
   void on_stack(const stack_t& s);
   void on_command(const command_t& c);
   void start_self_check();
+  // The calibration's patterns, as the default mode shows them (calibration_steps).
+  void start_calibration();
+  std::unique_ptr<PatternCapture> make_capture(std::vector<CalibrationStep> steps, std::string status_prefix);
+  void on_calibrate_command();
+  // --serve: a waiting CALIBRATE starts, or is dropped after --calibrate-wait.
+  void serve_calibrate_request(int64_t t);
+  // --serve: a calibration that did not happen or was rejected: counted, said, the old one kept.
+  void calibration_failed(const std::string& why);
+  void before_heartbeat() override;
   void clear_pattern();
   void publish_calibration();
   void finish_calibration(const std::vector<cv::Mat>& frames);
@@ -205,6 +233,10 @@ class CalibrateNode final : public runtime::Node {
   Mode mode_;
   std::string command_channel_, calibration_channel_;
   std::unique_ptr<PatternCapture> capture_;
+  bool capture_calibrates_ = false;  // capture_ is a calibration's patterns (else the self-check's)
+  std::optional<int64_t> calibrate_asked_utime_;  // --serve: a CALIBRATE waiting for the empty board
+  bool stack_seen_ = false;
+  int64_t calibrations_done_ = 0, calibrations_failed_ = 0, calibrate_ignored_ = 0;
   std::optional<calibration_t> calibration_;
   bool board_empty_ = false;
   int64_t empty_since_utime_ = 0;
