@@ -26,6 +26,7 @@ TEST_CASE("each action becomes the command its module obeys") {
       {R"({"action":"start_round"})", command_t::START_ROUND, ""},
       {R"({"action":"reset_round"})", command_t::RESET_ROUND, ""},
       {R"({"action":"check_calibration"})", command_t::SELF_CHECK, ""},
+      {R"({"action":"calibrate"})", command_t::CALIBRATE, ""},
       {R"({"action":"mark_moment","note":"a child cried at the board"})", command_t::MARK_MOMENT, "a child cried at the board"},
       {R"({"action":"mark_moment"})", command_t::MARK_MOMENT, "marked on the status page"},
       {R"({"action":"restart","host":"camera-host","module":"vision"})", command_t::RESTART_MODULE, "camera-host/vision"},

@@ -295,3 +295,66 @@ TEST_CASE("the round's display condition is on the page's JSON") {
   rig.step();
   CHECK(get_state(node.port())["round"]["condition"] == "red");
 }
+
+TEST_CASE("calibrate: with the token one CALIBRATE on the bus, without it refused and nothing sent") {
+  harness::Rig rig;
+  harness::ScratchDir dir("status-calibrate");
+  const std::string token = "fedcba9876543210fedcba9876543210";
+  std::ofstream(dir / "token") << token << "\n";
+  status::StatusConfig config;
+  config.port = 0;
+  config.token_file = (dir / "token").string();
+  auto& node = rig.add<status::StatusNode>(config);
+  auto& rec = rig.record({channel(kCommandChannel)});
+  httplib::Client client("127.0.0.1", node.port());
+  const std::string calibrate = R"({"action":"calibrate"})";
+  auto none = client.Post("/action", calibrate, "application/json");
+  REQUIRE(none);
+  CHECK(none->status == 403);
+  auto wrong = client.Post("/action", {{"X-Bricklayer-Token", token.substr(1) + "0"}}, calibrate, "application/json");
+  REQUIRE(wrong);
+  CHECK(wrong->status == 403);
+  rig.step();
+  CHECK(rec.all<command_t>(channel(kCommandChannel)).empty());
+  CHECK(node.desk().refused() == 2);
+
+  auto done = client.Post("/action", {{"X-Bricklayer-Token", token}}, calibrate, "application/json");
+  REQUIRE(done);
+  CHECK(done->status == 200);
+  CHECK(nlohmann::json::parse(done->body)["words"].get<std::string>().rfind("the calibration starts once the board", 0) == 0);
+  rig.step();
+  const auto sent = rec.all<command_t>(channel(kCommandChannel));
+  REQUIRE(sent.size() == 1);
+  CHECK(sent[0].command == command_t::CALIBRATE);
+  CHECK(sent[0].utime <= rig.now());
+  CHECK(node.desk().accepted() == 1);
+}
+
+TEST_CASE("the serving calibrate node's heartbeat is the page's calibration line, a one-off run's is not") {
+  harness::Rig rig;
+  status::StatusConfig config;
+  config.port = 0;
+  auto& node = rig.add<status::StatusNode>(config);
+  CHECK(get_state(node.port())["calibration"].is_null());
+  heartbeat_t serving{};
+  serving.module = "calibrate";
+  serving.pid = 500;
+  serving.status = "calibrating: step 2 of 6: projector blue";
+  serving.value_names = {"calibration_age_s", "calibrations_done", "calibrations_failed"};
+  serving.values = {3600.0, 1.0, 0.0};
+  serving.num_values = 3;
+  heartbeat_t one_off{};
+  one_off.module = "calibrate";
+  one_off.pid = 501;
+  one_off.status = "step 5 of 6: marker set 0";
+  rig.publish(channel(kHeartbeatChannel), serving);
+  rig.publish(channel(kHeartbeatChannel), one_off);
+  rig.step();
+  nlohmann::json c = get_state(node.port())["calibration"];
+  CHECK(c["status"] == "calibrating: step 2 of 6: projector blue");
+  CHECK(c["figures"]["calibration_age_s"] == 3600.0);
+  CHECK(c["figures"]["calibrations_done"] == 1.0);
+  CHECK(c["age_s"].get<double>() < 0.1);
+  rig.run_for(2s);
+  CHECK(get_state(node.port())["calibration"]["age_s"].get<double>() >= 2.0);  // the rig's clock
+}

@@ -1,16 +1,22 @@
 // NETNS, real processes and a real browser: a real bricklayer-launch and bricklayer-status, the page
 // opened in Debian's headless Chromium (modules/status/js/status_page_check.mjs, playwright-core). The
 // page loads with no console errors, shows the camera frame and projector image published on the bus, each module's state and the problems in words; a module
-// killed with -9 turns to a warning on the page and back to ok. The screenshot it takes is the one in
-// the README (build/test-output/status/status-page.png, copied to docs/status-page.png).
+// killed with -9 turns to a warning on the page and back to ok. The operator's controls pressed in the
+// browser: "Set" with the condition red reaches the real bricklayer-projection (the page then shows red
+// from its round_t), "Calibrate now" asks for a confirmation (dismissed: nothing sent; accepted: one
+// CALIBRATE on the bus) and the real bricklayer-calibrate --serve's answer shows on the calibration line.
+// The screenshot it takes is the one in the README (build/test-output/status/status-page.png, copied to
+// docs/status-page.png).
 #include <signal.h>
 
 #include <httplib.h>
 
 #include <catch2/catch.hpp>
 
+#include <atomic>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <thread>
 
 #include <lcm/lcm-cpp.hpp>
@@ -18,6 +24,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "bricklayer/command_t.hpp"
 #include "bricklayer/common/channels.h"
 #include "bricklayer/image_t.hpp"
 
@@ -81,6 +88,37 @@ image_t picture(int width, int height, bool projector, const std::string& source
   return im;
 }
 
+// Every command_t on BL_COMMAND while it lives (its own thread: the test's other waits block).
+class CommandListener {
+ public:
+  CommandListener() : bus_(kUrl) {
+    REQUIRE(bus_.good());
+    bus_.subscribe(channel(kCommandChannel), &CommandListener::on_command, this);
+    thread_ = std::thread([this] {
+      while (!stop_) bus_.handleTimeout(100);
+    });
+  }
+  ~CommandListener() {
+    stop_ = true;
+    thread_.join();
+  }
+  std::vector<command_t> commands() {
+    std::lock_guard lock(mutex_);
+    return commands_;
+  }
+
+ private:
+  void on_command(const lcm::ReceiveBuffer*, const std::string&, const command_t* c) {
+    std::lock_guard lock(mutex_);
+    commands_.push_back(*c);
+  }
+  lcm::LCM bus_;
+  std::atomic<bool> stop_{false};
+  std::mutex mutex_;
+  std::vector<command_t> commands_;
+  std::thread thread_;
+};
+
 json row(const json& result, const std::string& module) {
   for (const auto& r : result.at("rows"))
     if (r.at("module") == module) return r;
@@ -95,7 +133,9 @@ TEST_CASE("the status page in Chromium: no console errors, the modules' states, 
   harness::ScratchDir dir("status-browser");
   std::ofstream(dir / "camera.json") << R"({"modules":[
       {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]},
-      {"name":"broken","command":["/bin/false"],"heartbeat":"broken","backoff_max_s":0.3}]})";
+      {"name":"broken","command":["/bin/false"],"heartbeat":"broken","backoff_max_s":0.3},
+      {"name":"projection","command":["bricklayer-projection","--headless","--mute","--fps","10","--log-level","warn"]},
+      {"name":"calibrate","command":["bricklayer-calibrate","--serve","--output","calibration.json","--log-level","warn"]}]})";
   const std::string token = "0123456789abcdef0123456789abcdef";
   std::ofstream(dir / "token") << token << "\n";
   harness::Program status("bricklayer-status", {"--lcm-url", kUrl, "--port", std::to_string(kPort), "--token-file",
@@ -168,6 +208,45 @@ TEST_CASE("the status page in Chromium: no console errors, the modules' states, 
   CHECK(said);
   REQUIRE(fs::exists(shot));
   CHECK(fs::file_size(shot) > 10000);
+
+  // The operator's controls, in the browser, with the token: the display condition red reaches the real
+  // projection (the page shows red once projection's round_t says so); "Calibrate now" asks first
+  // (dismissed: no request), then sends CALIBRATE, and the calibrate node's answer (no board state: no
+  // vision runs here) is on the calibration line.
+  {
+    CommandListener listener;
+    harness::Ran pressed = harness::run_program(
+        node, {kScript, kPage, "--set-condition", "red", "--calibrate", "--token", token, "--calibration-shows",
+               "calibration waits for an empty board", "--timeout-s", "30"},
+        60s);
+    INFO(pressed.err);
+    REQUIRE(pressed.status.code == 0);
+    const json r = json::parse(pressed.out);
+    INFO(pressed.out);
+    CHECK(r.at("set_condition") == "Done: the display condition is red from now on");
+    CHECK(r.at("condition_after") == "red");
+    REQUIRE(r.at("dialogs").size() == 2);
+    CHECK(r.at("dialogs")[0].get<std::string>().rfind("Calibrate now? The board must be empty", 0) == 0);
+    CHECK(r.at("posts_after_dismiss") == 1);  // the condition's only: the dismissed confirmation sent nothing
+    CHECK(r.at("action_posts") == 2);
+    CHECK(r.at("calibrate").get<std::string>().rfind("Done: the calibration starts once the board", 0) == 0);
+    CHECK(r.at("calibration_line").get<std::string>().rfind(
+              "Calibration: calibration waits for an empty board: clear the board", 0) == 0);
+    CHECK(r.at("console").empty());
+    CHECK(r.at("errors").empty());
+    // On the bus: the condition (index 2, red) and exactly one CALIBRATE, both from the status page.
+    const auto end = std::chrono::steady_clock::now() + 10s;
+    auto count = [&](int32_t code) {
+      int n = 0;
+      for (const command_t& c : listener.commands()) n += c.command == code;
+      return n;
+    };
+    while (count(command_t::CALIBRATE) == 0 && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(50ms);
+    CHECK(count(command_t::CALIBRATE) == 1);
+    int red = 0;
+    for (const command_t& c : listener.commands()) red += c.command == command_t::SET_CONDITION && c.index == 2;
+    CHECK(red == 1);
+  }
 
   // Watching the page while prediction is killed with -9: up, then restarting or starting (a warning),
   // then up again.

@@ -4,6 +4,8 @@
 // and every module's row (its level and cells).
 // Usage: node status_page_check.mjs URL [--screenshot OUT.png] [--watch MODULE] [--timeout-s S]
 //                                        [--restart MODULE --token TOKEN [--wrong-token WRONG]] [--images]
+//                                        [--set-condition CONDITION --token TOKEN]
+//                                        [--calibrate --token TOKEN [--calibration-shows WORDS]]
 //   --images: waits until the camera frame and the projector image have loaded and reports their
 //   natural widths and captions in "images".
 //   --watch MODULE: once MODULE's row says "up", prints "watching" on stderr, then records every change
@@ -11,6 +13,14 @@
 //   --restart MODULE: the same watch, but the restart is the page's own: it types WRONG (when given) into
 //   the token field and presses the module's restart button (the answer goes to "refused"), then TOKEN and
 //   presses it again (the answer goes to "action").
+//   --set-condition CONDITION: types TOKEN, chooses CONDITION in the display condition control and presses
+//   "Set" (the answer goes to "set_condition"), then waits until the round's condition on the page (from
+//   round_t, i.e. what projection reports it shows) reads CONDITION ("condition_after").
+//   --calibrate: types TOKEN and presses "Calibrate now" twice: the first confirmation is dismissed (no
+//   request may follow: "posts_after_dismiss" counts the POSTs to /action until then), the second accepted
+//   (the answer goes to "calibrate"); "dialogs" are the confirmations' words; then waits until the
+//   calibration line says WORDS (--calibration-shows WORDS; without it: until it changes) and reports it
+//   ("calibration_line").
 // Prints one JSON object on stdout; exits 2 when the browser cannot be started or the page not opened.
 import { createRequire } from "node:module";
 import { dirname, join } from "node:path";
@@ -45,7 +55,8 @@ try {
   console.error(`status_page_check: cannot start Chromium: ${e.message}`);
   process.exit(2);
 }
-const result = { console: [], errors: [], failed_requests: [], transitions: [] };
+const result = { console: [], errors: [], failed_requests: [], transitions: [], dialogs: [] };
+let actionPosts = 0;
 const rows = (page) => page.evaluate(() => [...document.querySelectorAll("tr[data-module]")].map((r) => ({
   module: r.dataset.module, level: r.className, cells: [...r.cells].map((c) => c.textContent) })));
 try {
@@ -54,17 +65,24 @@ try {
   page.on("console", (m) => result.console.push({ type: m.type(), text: m.text() }));
   page.on("pageerror", (e) => result.errors.push(String(e)));
   page.on("requestfailed", (r) => result.failed_requests.push(r.url().slice(0, 120)));
+  page.on("request", (r) => { if (r.method() === "POST" && r.url().endsWith("/action")) ++actionPosts; });
+  // Confirmations: dismissed while acceptDialogs is false (the operator's "Cancel"), else accepted.
+  let acceptDialogs = false;
+  page.on("dialog", async (d) => {
+    result.dialogs.push(d.message());
+    await (acceptDialogs ? d.accept() : d.dismiss());
+  });
   await page.goto(url, { waitUntil: "load" });
   result.title = await page.title();
   // The first answer of /state.json has been drawn once a module row is there.
   await page.waitForSelector("tr[data-module]", { timeout: timeout_ms });
   const restart = option("--restart");
   const watch = option("--watch") ?? restart;
-  const press = async (token) => {
+  const press = async (token, selector = `tr[data-module="${restart}"] button`) => {
     await page.fill("#token", token);
     await page.dispatchEvent("#token", "change");
     const before = await page.textContent("#action-result");
-    await page.click(`tr[data-module="${restart}"] button`);
+    await page.click(selector);
     // The answer replaces the result line (the same words twice would not show a change: clear first).
     await page.waitForFunction((b) => document.querySelector("#action-result").textContent !== b, before, { timeout: 10000 });
     const text = await page.textContent("#action-result");
@@ -97,6 +115,30 @@ try {
       }
     }
   }
+  const condition = option("--set-condition");
+  if (condition) {
+    await page.selectOption("#condition-choice", condition);
+    result.set_condition = await press(option("--token") ?? "", 'button[data-action="set_condition"]');
+    await page.waitForFunction((c) => document.getElementById("condition").textContent === c, condition,
+      { timeout: timeout_ms });
+    result.condition_after = await page.textContent("#condition");
+  }
+  if (args.includes("--calibrate")) {
+    const line = await page.textContent("#calibration");
+    await page.fill("#token", option("--token") ?? "");
+    await page.dispatchEvent("#token", "change");
+    await page.click('button[data-action="calibrate"]');  // confirm() returns once the dialog is dismissed
+    result.posts_after_dismiss = actionPosts;
+    acceptDialogs = true;
+    result.calibrate = await press(option("--token") ?? "", 'button[data-action="calibrate"]');
+    // The calibrate node's answer comes in its next heartbeat: wait for the words asked for, else any change.
+    await page.waitForFunction(([b, want]) => {
+      const now = document.getElementById("calibration").textContent;
+      return want ? now.includes(want) : now !== b;
+    }, [line, option("--calibration-shows")], { timeout: timeout_ms });
+    result.calibration_line = await page.textContent("#calibration");
+  }
+  result.action_posts = actionPosts;
   if (args.includes("--images")) {
     await page.waitForFunction(() => ["camera-img", "projector-img"].every((id) => document.getElementById(id).naturalWidth > 0),
       null, { timeout: timeout_ms });

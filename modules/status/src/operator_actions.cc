@@ -117,6 +117,10 @@ ActionAnswer decide_action(const std::string& body, const std::string& token_giv
   } else if (action == "check_calibration") {
     a.command = command(command_t::SELF_CHECK);
     a.words = "the calibration is checked for drift as soon as the board is empty";
+  } else if (action == "calibrate") {
+    a.command = command(command_t::CALIBRATE);
+    a.words = "the calibration starts once the board has been empty for a few seconds; the projector shows its "
+              "patterns meanwhile (see Calibration)";
   } else if (action == "set_condition") {
     // The display condition of the next round (what the blocks' colours mean), as projection reads
     // command_t.index: study_session_t::CONDITION_BLUE, _RED, _PROPOSED.

@@ -94,6 +94,16 @@ void StatusBoard::update(const heartbeat_t& hb) {
   const size_t n = std::min({static_cast<size_t>(std::max(0, hb.num_values)), hb.value_names.size(), hb.values.size()});
   f.names.assign(hb.value_names.begin(), hb.value_names.begin() + static_cast<std::ptrdiff_t>(n));
   f.values.assign(hb.values.begin(), hb.values.begin() + static_cast<std::ptrdiff_t>(n));
+  // A one-off bricklayer-calibrate run (at the board) is "calibrate" too: the line follows the serving one.
+  if (hb.module == "calibrate" && std::find(f.names.begin(), f.names.end(), "calibrations_done") != f.names.end()) {
+    Calibrate c;
+    c.received_utime = now_;
+    c.status = hb.status;
+    c.figures = nlohmann::json::object();
+    for (size_t i = 0; i < n; ++i)
+      if (std::isfinite(f.values[i])) c.figures[f.names[i]] = f.values[i];
+    calibrate_ = std::move(c);
+  }
   for (auto it = figures_.begin(); it != figures_.end();)
     it = now_ - it->second.received_utime > 60'000'000 ? figures_.erase(it) : std::next(it);
 }
@@ -167,8 +177,12 @@ nlohmann::json StatusBoard::to_json() const {
              {"max_score", r.max_score}, {"num_blocks", r.num_blocks},
              {"condition", condition_word(r.condition)}};
   }
+  json calibration = nullptr;
+  if (calibrate_)
+    calibration = {{"status", calibrate_->status}, {"age_s", static_cast<double>(now_ - calibrate_->received_utime) / 1e6},
+                   {"figures", calibrate_->figures}};
   return {{"utime", now_}, {"level", level_name(worst)}, {"problems", problems}, {"hosts", hosts},
-          {"round", round}, {"best_today", best_today_}};
+          {"round", round}, {"best_today", best_today_}, {"calibration", calibration}};
 }
 
 }  // namespace bricklayer::status

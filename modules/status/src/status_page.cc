@@ -57,7 +57,9 @@ constexpr const char* kPage = R"HTML(<!DOCTYPE html>
     <button data-action="start_round">Start a round</button>
     <button data-action="reset_round">Reset the round</button>
     <button data-action="check_calibration">Check the calibration</button>
+    <button data-action="calibrate" data-confirm="Calibrate now? The board must be empty: once it has been empty for 5 s the projector shows calibration patterns instead of the game for about 5 s.">Calibrate now</button>
   </div>
+  <div id="calibration" class="muted">Calibration: nothing heard from bricklayer-calibrate --serve yet.</div>
   <div><label>Display condition for the next round
     <select id="condition-choice"><option value="proposed">proposed (only the blocks that start the fall red)</option>
       <option value="blue">blue (always blue)</option><option value="red">red (all red while it falls)</option></select></label>
@@ -95,6 +97,7 @@ function draw(state) {
   }
   document.getElementById("best").textContent = state.best_today;
   if (state.round) document.getElementById("condition").textContent = state.round.condition;
+  show_calibration(state.calibration);
   show_image("camera", state.camera, "camera frame");
   show_image("projector", state.projector, "projector image");
   const hosts = document.getElementById("hosts");
@@ -136,6 +139,23 @@ function draw(state) {
     "Actions are off on this machine (no token file): the page only shows the state.";
   document.getElementById("updated").textContent = "Updated " + new Date().toLocaleTimeString();
 }
+// The serving calibrate node's heartbeat: its status (a calibration's progress, a rejection and why) and
+// figures in words.
+function show_calibration(c) {
+  const line = document.getElementById("calibration");
+  if (!c) return;
+  const f = c.figures || {};
+  const number = (v) => Number(v.toPrecision(2));
+  const parts = [];
+  if (f.calibration_age_s !== undefined) parts.push("calibrated " + duration(f.calibration_age_s) + " ago");
+  if (f.reprojection_error_mean_px !== undefined) parts.push("error " + number(f.reprojection_error_mean_px) + " px");
+  if (f.drift_px !== undefined) parts.push("drift " + number(f.drift_px) + " px at the last check");
+  if (f.calibrations_done) parts.push(f.calibrations_done + " done on request");
+  if (f.calibrations_failed) parts.push(f.calibrations_failed + " not done");
+  line.textContent = "Calibration: " + c.status + (c.age_s > 5 ? " (heard " + duration(c.age_s) + " ago)" : "") +
+    (parts.length ? " | " + parts.join(", ") : "");
+  line.className = c.status === "ok" ? "muted" : "muted warning";
+}
 // An image is asked for only once the JSON says one was seen (asking before would be a 404, an error
 // in the browser's console) and again every 3 s; a new URL each time, so no cache keeps an old one.
 const imageAsked = {};
@@ -175,7 +195,8 @@ async function act(request) {
   }
 }
 for (const b of document.querySelectorAll("#actions-card button")) {
-  b.onclick = () => act(b.dataset.action === "mark_moment"
+  // A calibration takes the projector from the game: the operator says the board is empty first.
+  b.onclick = () => (b.dataset.confirm && !confirm(b.dataset.confirm)) || act(b.dataset.action === "mark_moment"
     ? { action: "mark_moment", note: document.getElementById("note").value }
     : b.dataset.action === "set_condition"
     ? { action: "set_condition", condition: document.getElementById("condition-choice").value }

@@ -1,7 +1,7 @@
 // The operator's actions from the status page: start or reset the round, mark a moment in the log,
-// check the calibration for drift, restart a module, set the display condition. Each is one command_t on BL_COMMAND, which the
-// modules already obey (projection the round, the logger the mark, calibrate the self-check, the
-// host's launcher the restart).
+// check the calibration for drift, calibrate, restart a module, set the display condition. Each is one
+// command_t on BL_COMMAND, which the modules already obey (projection the round and the condition, the
+// logger the mark, calibrate --serve the self-check and the calibration, the host's launcher the restart).
 //
 // The page is read-only without a token: an action needs the token in the X-Bricklayer-Token header,
 // equal to the contents of the token file launch/setup writes outside the repository
@@ -38,7 +38,8 @@ struct ActionAnswer {
 
 // Decides one request: its body (JSON {"action": ..., "host": ..., "module": ..., "note": ...}) and the
 // token it carried. Actions: "start_round", "reset_round", "mark_moment" (note optional),
-// "check_calibration", "restart" (host and module required), "set_condition" ("condition": "blue",
+// "check_calibration" (SELF_CHECK), "calibrate" (CALIBRATE), "restart" (host and module required),
+// "set_condition" ("condition": "blue",
 // "red" or "proposed": command_t SET_CONDITION with index 1, 2, 3). Never throws.
 ActionAnswer decide_action(const std::string& body, const std::string& token_given, const std::string& token_expected);
 

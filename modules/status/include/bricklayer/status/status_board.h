@@ -52,12 +52,14 @@ class StatusBoard {
   void update(const host_state_t& state, int64_t received_utime);
   void update(const round_t& round);
   // A module's own heartbeat: its figures (values) are shown on its row, found by its pid. Heartbeats not
-  // renewed for a minute (a process that ended) are forgotten.
+  // renewed for a minute (a process that ended) are forgotten. The serving calibrate node's heartbeat
+  // (bricklayer-calibrate --serve: the one with "calibrations_done") is also the page's calibration line.
   void update(const heartbeat_t& heartbeat);
 
   size_t num_hosts() const;
   // The whole page's data: {"utime", "level", "problems": [...], "hosts": [...], "round": {...} | null,
-  // "best_today"}; each module of a host carries "figures": {name: value} from its latest heartbeat.
+  // "best_today", "calibration": {"status", "age_s", "figures"} | null}; each module of a host carries
+  // "figures": {name: value} from its latest heartbeat.
   nlohmann::json to_json() const;
 
  private:
@@ -78,6 +80,12 @@ class StatusBoard {
     std::vector<double> values;
   };
   std::map<int32_t, Figures> figures_;  // by pid
+  struct Calibrate {
+    int64_t received_utime = 0;
+    std::string status;
+    nlohmann::json figures;
+  };
+  std::optional<Calibrate> calibrate_;  // the serving calibrate node's latest heartbeat
   // The best MAX of the day (UTC date of the round's utime) seen by this page; reset at midnight.
   int32_t best_today_ = 0;
   int64_t best_day_ = -1;

@@ -38,7 +38,7 @@ struct StatusConfig {
     v(runtime::param("silent-after", silent_after_s, "a host not heard from for this long, seconds, is reported silent")
           .range(1.5, 3600));
     v(runtime::param("token-file", token_file,
-                     "the operator's token for actions (restart, reset, mark, check calibration); no such file = the "
+                     "the operator's token for actions (restart, reset, mark, check calibration, calibrate, condition); no such file = the "
                      "page is read-only. launch/setup writes one readable only by its owner"));
   }
 };
@@ -50,7 +50,7 @@ class StatusNode final : public runtime::Node {
   static constexpr const char* kSummary =
       "The operator's status page: every host's modules (from BL_HOST_STATE) and the round (BL_ROUND),\n"
       "served as a web page at http://LISTEN:PORT/ and as JSON at /state.json; with the operator's token\n"
-      "(--token-file) the page also restarts modules, resets the round, marks moments and checks the calibration.";
+      "(--token-file) the page also restarts modules, resets the round, marks moments, checks or redoes the calibration and sets the display condition.";
 
   // Throws std::invalid_argument for a bad configuration, std::runtime_error when it cannot listen.
   StatusNode(const Config& config, runtime::Bus& bus);
