@@ -8,8 +8,10 @@
 
 #include "bricklayer/launcher/opening_hours.h"
 #include "bricklayer/launcher/profile.h"
+#include "profile_error.h"
 
 using namespace bricklayer::launcher;
+using bricklayer::test::profile_error;
 
 namespace {
 constexpr int kMon = 0, kTue = 1, kWed = 2, kSat = 5, kSun = 6;
@@ -19,15 +21,6 @@ std::string error_of(const std::string& text) {
   try {
     OpeningHours::parse(text);
   } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
-
-std::string profile_error(const std::string& json) {
-  try {
-    parse_profile(json, "p");
-  } catch (const ProfileError& e) {
     return e.what();
   }
   return "";

@@ -11,19 +11,10 @@
 #include <sstream>
 
 #include "bricklayer/launcher/process.h"
+#include "profile_error.h"
 
 using namespace bricklayer::launcher;
-
-namespace {
-std::string error_of(const std::string& json) {
-  try {
-    parse_profile(json, "t");
-  } catch (const ProfileError& e) {
-    return e.what();
-  }
-  return "";
-}
-}  // namespace
+using bricklayer::test::profile_error;
 
 TEST_CASE("every profile in launch/profiles parses") {
   int n = 0;
@@ -86,21 +77,21 @@ TEST_CASE("a profile's defaults") {
 }
 
 TEST_CASE("profile mistakes are loud and name the place") {
-  CHECK(error_of("{").find("not valid JSON") != std::string::npos);
-  CHECK(error_of(R"({"modules":[], "modulez":1})").find("unknown key 'modulez'") != std::string::npos);
-  CHECK(error_of(R"({"modules":[{"name":"a"}]})").find("'a': 'command' is required") != std::string::npos);
-  CHECK(error_of(R"({"modules":[{"name":"a","command":[]}]})").find("'command' is empty") != std::string::npos);
-  CHECK(error_of(R"({"modules":[{"name":"a","command":["x"],"restart":"sometimes"}]})")
+  CHECK(profile_error("{").find("not valid JSON") != std::string::npos);
+  CHECK(profile_error(R"({"modules":[], "modulez":1})").find("unknown key 'modulez'") != std::string::npos);
+  CHECK(profile_error(R"({"modules":[{"name":"a"}]})").find("'a': 'command' is required") != std::string::npos);
+  CHECK(profile_error(R"({"modules":[{"name":"a","command":[]}]})").find("'command' is empty") != std::string::npos);
+  CHECK(profile_error(R"({"modules":[{"name":"a","command":["x"],"restart":"sometimes"}]})")
             .find("'sometimes' is not one of always, on-failure, never") != std::string::npos);
-  CHECK(error_of(R"({"modules":[{"name":"a","command":["x"]},{"name":"a","command":["y"]}]})")
+  CHECK(profile_error(R"({"modules":[{"name":"a","command":["x"]},{"name":"a","command":["y"]}]})")
             .find("two modules are named 'a'") != std::string::npos);
-  CHECK(error_of(R"({"modules":[{"name":"a","command":["x"],"ready_timeout_s":-1}]})").find("ready_timeout_s") !=
+  CHECK(profile_error(R"({"modules":[{"name":"a","command":["x"],"ready_timeout_s":-1}]})").find("ready_timeout_s") !=
         std::string::npos);
-  CHECK(error_of(R"({"modules":[{"name":"a","command":["x"],"env":["NOEQUALS"]}]})").find("NAME=value") !=
+  CHECK(profile_error(R"({"modules":[{"name":"a","command":["x"],"env":["NOEQUALS"]}]})").find("NAME=value") !=
         std::string::npos);
-  CHECK(error_of(R"({"modules":[{"name":"a","command":["x"]}],"logger":{"rotat":3}})").find("unknown key 'rotat'") !=
+  CHECK(profile_error(R"({"modules":[{"name":"a","command":["x"]}],"logger":{"rotat":3}})").find("unknown key 'rotat'") !=
         std::string::npos);
-  CHECK(error_of(R"({"modules":[]})").find("nothing to launch") != std::string::npos);
+  CHECK(profile_error(R"({"modules":[]})").find("nothing to launch") != std::string::npos);
   CHECK_THROWS_AS(load_profile("/nonexistent/profile.json"), ProfileError);
 }
 
@@ -274,12 +265,12 @@ TEST_CASE("the logger spec: a disk budget, a frame policy, and the command line 
   // Without a budget or frames: as before (rotate 10, every frame).
   const Profile plain = parse_profile(R"({"modules":[],"logger":{"file":"logs/x"}})", "t");
   CHECK(logger_arguments(*plain.logger, "f") == std::vector<std::string>{"--rotate=10", "--split-mb=100", "f"});
-  CHECK(error_of(R"({"modules":[],"logger":{"budget_mb":100,"split_mb":60}})").find("at most half of 'budget_mb'") !=
+  CHECK(profile_error(R"({"modules":[],"logger":{"budget_mb":100,"split_mb":60}})").find("at most half of 'budget_mb'") !=
         std::string::npos);
-  CHECK(error_of(R"({"modules":[],"logger":{"frames":{"rate":2,"window":3}}})").find("unknown key 'window'") !=
+  CHECK(profile_error(R"({"modules":[],"logger":{"frames":{"rate":2,"window":3}}})").find("unknown key 'window'") !=
         std::string::npos);
-  CHECK(error_of(R"({"modules":[],"logger":{"frames":{"rate":0}}})").find("'rate' must be >=") != std::string::npos);
-  CHECK(error_of(R"({"modules":[],"logger":{"frames":5}})").find("'frames' must be an object") != std::string::npos);
+  CHECK(profile_error(R"({"modules":[],"logger":{"frames":{"rate":0}}})").find("'rate' must be >=") != std::string::npos);
+  CHECK(profile_error(R"({"modules":[],"logger":{"frames":5}})").find("'frames' must be an object") != std::string::npos);
   // Answers thinned with their frames: one more flag; only the two words.
   const Profile with = parse_profile(R"({"modules":[],"logger":{"file":"logs/x","frames":{"rate":2,"answers":"with_frames"}}})", "t");
   const std::vector<std::string> with_args = logger_arguments(*with.logger, "f");
@@ -287,7 +278,7 @@ TEST_CASE("the logger spec: a disk budget, a frame policy, and the command line 
   const Profile whole = parse_profile(R"({"modules":[],"logger":{"file":"logs/x","frames":{"rate":2,"answers":"whole"}}})", "t");
   const std::vector<std::string> whole_args = logger_arguments(*whole.logger, "f");
   CHECK(std::count(whole_args.begin(), whole_args.end(), "--answers-with-frames") == 0);
-  CHECK(error_of(R"({"modules":[],"logger":{"frames":{"rate":2,"answers":"some"}}})").find("'answers' must be") !=
+  CHECK(profile_error(R"({"modules":[],"logger":{"frames":{"rate":2,"answers":"some"}}})").find("'answers' must be") !=
         std::string::npos);
 }
 
