@@ -15,6 +15,7 @@
 #include "bricklayer/frames/camera_controls.h"
 #include "bricklayer/doctor/camera_check.h"
 #include "doctor_test_util.h"
+#include "harness/program.h"
 
 using namespace bricklayer;
 using test::check_line;
@@ -141,15 +142,15 @@ TEST_CASE("a device held open by another process is found through /proc (a camer
   auto dir = test::temp_dir("users");
   const std::string node = test::write_file(dir / "video9", "");
   CHECK(doctor::processes_using(node).empty());
-  pid_t holder = test::spawn({"/bin/sh", "-c", "exec 3<" + node + " && exec sleep 30"});
+  harness::Program holder("/bin/sh", {"-c", "exec 3<" + node + " && exec sleep 30"});
   std::vector<std::string> users;
   for (int i = 0; i < 100 && users.empty(); ++i) {
     usleep(20000);
     users = doctor::processes_using(node);
   }
   REQUIRE(users.size() == 1);
-  CHECK(users[0] == "sleep (pid " + std::to_string(holder) + ")");
-  test::stop(holder);
+  CHECK(users[0] == "sleep (pid " + std::to_string(holder.pid()) + ")");
+  holder.stop();
   CHECK(doctor::processes_using(node).empty());
   fs::remove_all(dir);
 }

@@ -32,7 +32,7 @@ std::vector<std::string> peer_doctor(const std::string& shift, const std::string
     script += "export FAKETIME='" + shift + "' LD_PRELOAD=" + kFaketime +
               " ASAN_OPTIONS=\"${ASAN_OPTIONS:-}:verify_asan_link_order=0\" && ";
   script += "exec \"$0\" \"$@\"";
-  return {"/usr/bin/unshare", getuid() == 0 ? "-u" : "-ru", "sh", "-c", script, test::program("bricklayer-doctor"),
+  return {"/usr/bin/unshare", getuid() == 0 ? "-u" : "-ru", "sh", "-c", script, harness::program_path("bricklayer-doctor"),
           "projector-host", "--checks", "clock", "--lcm-url", kUrl, "--listen-s", listen_s};
 }
 

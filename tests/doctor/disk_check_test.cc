@@ -24,7 +24,7 @@ test::DoctorRun doctor_on_tmpfs(const fs::path& dir, const std::string& logger, 
     script += " && head -c " + std::to_string(preload_kb * 1024) + " /dev/zero > " + dir.string() + "/logs/old.00";
   script += " && exec \"$0\" \"$@\"";
   std::vector<std::string> argv = {"/usr/bin/unshare", getuid() == 0 ? "-m" : "-rm", "sh", "-c", script,
-                                   test::program("bricklayer-doctor"), profile, "--root", dir.string(), "--checks", "disk",
+                                   harness::program_path("bricklayer-doctor"), profile, "--root", dir.string(), "--checks", "disk",
                                    "--min-free-mb", min_free_mb};
   return test::run_capture(argv);
 }

@@ -4,8 +4,10 @@
 #include <catch2/catch.hpp>
 
 #include <filesystem>
+#include <memory>
 
 #include "doctor_test_util.h"
+#include "harness/program.h"
 
 using namespace bricklayer;
 using test::check_line;
@@ -19,17 +21,17 @@ namespace {
 class Xvfb {
  public:
   explicit Xvfb(const std::string& screen, int offset) : display_(":" + std::to_string(200 + (getpid() * 7 + offset) % 700)) {
-    pid_ = test::spawn({"/usr/bin/Xvfb", display_, "-screen", "0", screen, "-nolisten", "tcp"});
+    server_ = std::make_unique<harness::Program>("/usr/bin/Xvfb",
+                                                 std::vector<std::string>{display_, "-screen", "0", screen, "-nolisten", "tcp"});
     for (int i = 0; i < 200 && !fs::exists(socket()); ++i) usleep(25000);
   }
-  ~Xvfb() { test::stop(pid_); }
   bool up() const { return fs::exists(socket()); }
   std::string env() const { return "DISPLAY=" + display_; }
 
  private:
   std::string socket() const { return "/tmp/.X11-unix/X" + display_.substr(1); }
   std::string display_;
-  pid_t pid_;
+  std::unique_ptr<harness::Program> server_;  // stopped when the test ends
 };
 
 const std::vector<std::string> kNoSdlOverride = {"SDL_VIDEODRIVER=", "WAYLAND_DISPLAY="};

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "../common/spawn_util.h"
+#include "harness/scratch.h"
 
 namespace bricklayer::test {
 
@@ -22,8 +22,9 @@ struct DoctorRun {
   std::string out;  // stdout and stderr
 };
 
-// Runs argv (argv[0] a path) with extra environment entries ("NAME=value"; "NAME=" removes NAME),
-// for at most `seconds`.
+// Runs argv (argv[0] a path) with extra environment entries ("NAME=value"; "NAME=" removes NAME,
+// which harness::run_program cannot: the doctor tells an unset DISPLAY from an empty one), for at most
+// `seconds`, its stdout and stderr in one pipe so the lines keep their order.
 inline DoctorRun run_capture(std::vector<std::string> argv, const std::vector<std::string>& env = {}, int seconds = 60) {
   int pipefd[2];
   if (pipe(pipefd) != 0) return {};
@@ -76,7 +77,7 @@ inline DoctorRun run_capture(std::vector<std::string> argv, const std::vector<st
 }
 
 inline DoctorRun run_doctor(std::vector<std::string> args, const std::vector<std::string>& env = {}, int seconds = 60) {
-  args.insert(args.begin(), program("bricklayer-doctor"));
+  args.insert(args.begin(), harness::program_path("bricklayer-doctor"));
   return run_capture(std::move(args), env, seconds);
 }
 

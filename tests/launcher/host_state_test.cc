@@ -6,9 +6,14 @@
 #include <catch2/catch.hpp>
 
 #include <map>
+#include <thread>
 
+#include "bricklayer/common/channels.h"
+#include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/host_state_t.hpp"
 #include "bricklayer/launcher/supervisor.h"
+#include "bricklayer/runtime/lcm_bus.h"
+#include "harness/recorder.h"
 #include "launcher_test_util.h"
 
 using namespace bricklayer;
@@ -26,16 +31,13 @@ TEST_CASE("a late observer catches up on both hosts' whole state from one host_s
   auto b = test::launch(dir, projector_profile, {"--host-name", "projector-host"}, "b");
   // Started late: everything is up (or retrying) by now.
   std::this_thread::sleep_for(4s);
-  test::Listener bus;
-  REQUIRE(bus.ok());
-  bus.listen(channel(launcher::kHostStateChannel));
-  bus.listen(channel(kHeartbeatChannel));
+  runtime::LcmBus bus(harness::kLiveUrl);
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(bus, {channel(launcher::kHostStateChannel), channel(kHeartbeatChannel)});
   std::map<std::string, host_state_t> first;  // the first message heard from each host
-  REQUIRE(bus.pump_until([&] {
-    for (const auto& m : bus.on(channel(launcher::kHostStateChannel))) {
-      host_state_t hs{};
-      if (test::decode(m.bytes, hs) && !first.count(hs.host)) first[hs.host] = hs;
-    }
+  REQUIRE(rec.wait_until([&] {
+    for (const host_state_t& hs : rec.all<host_state_t>(channel(launcher::kHostStateChannel)))
+      if (!first.count(hs.host)) first[hs.host] = hs;
     return first.size() == 2;
   }, 3s));
   INFO(dir.read("launcha.out") << dir.read("launchb.out"));
@@ -73,29 +75,24 @@ TEST_CASE("a late observer catches up on both hosts' whole state from one host_s
   CHECK(proj.status == "ok");
 
   // Once a second, and the pid agrees with the module's own heartbeat.
-  bus.messages.clear();
-  bus.pump(2500ms);
+  rec.clear();
+  rec.pump_for(2500ms);
   int from_camera = 0;
-  for (const auto& m : bus.on(channel(launcher::kHostStateChannel))) {
-    host_state_t hs{};
-    from_camera += test::decode(m.bytes, hs) && hs.host == "camera-host";
-  }
+  for (const host_state_t& hs : rec.all<host_state_t>(channel(launcher::kHostStateChannel))) from_camera += hs.host == "camera-host";
   CHECK(from_camera >= 2);
   CHECK(from_camera <= 4);
-  heartbeat_t hb{};
-  REQUIRE(bus.last_heartbeat("prediction", hb));
-  CHECK(hb.pid == prediction.pid);
+  const auto hb = rec.last_heartbeat("prediction");
+  REQUIRE(hb);
+  CHECK(hb->pid == prediction.pid);
 
   // A host that stops says so last: its modules stopped.
-  bus.messages.clear();
+  rec.clear();
   b.signal(SIGTERM);
   REQUIRE(b.wait_for(15s));
-  bus.pump(300ms);
+  rec.pump_for(300ms);
   host_state_t last{};
-  for (const auto& m : bus.on(channel(launcher::kHostStateChannel))) {
-    host_state_t hs{};
-    if (test::decode(m.bytes, hs) && hs.host == "projector-host") last = hs;
-  }
+  for (const host_state_t& hs : rec.all<host_state_t>(channel(launcher::kHostStateChannel)))
+    if (hs.host == "projector-host") last = hs;
   REQUIRE(last.num_modules == 2);
   CHECK(last.modules[0].state == module_state_t::STATE_STOPPED);
   a.signal(SIGTERM);
@@ -110,36 +107,34 @@ TEST_CASE("a host whose launcher goes silent is missed in the other host's statu
       {"name":"sleeper","command":["/bin/sleep","60"],"heartbeat":""}]})");
   auto a = test::launch(dir, camera_profile, {"--host-name", "camera-host"}, "a");
   auto b = test::launch(dir, projector_profile, {"--host-name", "projector-host"}, "b");
-  test::Listener bus;
-  REQUIRE(bus.ok());
-  bus.listen(channel(launcher::kHostStateChannel));
+  runtime::LcmBus bus(harness::kLiveUrl);
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(bus, {channel(launcher::kHostStateChannel)});
   auto camera_status = [&] {
     std::string status;
-    for (const auto& m : bus.on(channel(launcher::kHostStateChannel))) {
-      host_state_t hs{};
-      if (test::decode(m.bytes, hs) && hs.host == "camera-host") status = hs.status;
-    }
+    for (const host_state_t& hs : rec.all<host_state_t>(channel(launcher::kHostStateChannel)))
+      if (hs.host == "camera-host") status = hs.status;
     return status;
   };
-  REQUIRE(bus.pump_until([&] { return dir.read("launcha.out").find("host projector-host (profile projector) is on the bus") != std::string::npos; }, 10s));
+  REQUIRE(rec.wait_until([&] { return dir.read("launcha.out").find("host projector-host (profile projector) is on the bus") != std::string::npos; }, 10s));
   INFO(dir.read("launcha.out"));
   // The projector host's launcher dies without a word (kill -9: no last message).
   b.signal(SIGKILL);
   REQUIRE(b.wait_for(5s));
-  bus.messages.clear();
-  REQUIRE(bus.pump_until([&] { return camera_status().find("no host state from projector-host for") != std::string::npos; }, 10s));
+  rec.clear();
+  REQUIRE(rec.wait_until([&] { return camera_status().find("no host state from projector-host for") != std::string::npos; }, 10s));
   CHECK(camera_status().rfind("no host state from projector-host for ", 0) == 0);
   CHECK(dir.read("launcha.out").find("no host state from projector-host for 5.0 s (the other machine off") != std::string::npos);
 
   // Back: heard again, "ok"; then stopped on purpose (SIGTERM: its last message says stopped): not missed.
   auto b2 = test::launch(dir, projector_profile, {"--host-name", "projector-host"}, "b2");
-  bus.messages.clear();
-  REQUIRE(bus.pump_until([&] { return camera_status() == "ok"; }, 10s));
+  rec.clear();
+  REQUIRE(rec.wait_until([&] { return camera_status() == "ok"; }, 10s));
   CHECK(dir.read("launcha.out").find("host projector-host is heard again") != std::string::npos);
   b2.signal(SIGTERM);
   REQUIRE(b2.wait_for(15s));
-  bus.messages.clear();
-  bus.pump(7s);
+  rec.clear();
+  rec.pump_for(7s);
   CHECK(camera_status() == "ok");
   a.signal(SIGTERM);
   REQUIRE(a.wait_for(15s));

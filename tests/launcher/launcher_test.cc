@@ -10,6 +10,8 @@
 #include <regex>
 #include <sstream>
 
+#include "bricklayer/common/channels.h"
+#include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/command_t.hpp"
 #include "bricklayer/host_state_t.hpp"
 #include "bricklayer/launcher/supervisor.h"
@@ -17,8 +19,10 @@
 #include "bricklayer/launcher/process.h"
 #include "bricklayer/prediction/sample_stacks.h"
 #include "bricklayer/prediction_t.hpp"
+#include "bricklayer/runtime/lcm_bus.h"
 #include "bricklayer/stack_t.hpp"
-#include "../bus/bus_test_util.h"
+#include "harness/live_bus.h"
+#include "harness/recorder.h"
 #include "launcher_test_util.h"
 
 using namespace bricklayer;
@@ -28,21 +32,19 @@ using Clock = std::chrono::steady_clock;
 using test::launch;
 using test::TempDir;
 
-
 TEST_CASE("kill -9 of the prediction under the launcher: heartbeat back within 2 s, predictions resume") {
   TempDir dir("kill");
   auto profile = dir.write("p.json", R"({"modules":[
       {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"],"restart":"always"}]})");
   auto launcher = launch(dir, profile);
-  test::Listener bus;
-  REQUIRE(bus.ok());
-  bus.listen(channel(kPredictionChannel));
-  bus.listen(channel(kHeartbeatChannel));
+  runtime::LcmBus bus(harness::kLiveUrl);
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(bus, {channel(kPredictionChannel), channel(kHeartbeatChannel)});
 
-  heartbeat_t hb{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", hb); }, 10s));
-  const pid_t first = hb.pid;
-  CHECK(hb.restarts == 0);
+  const auto hb = rec.wait_for_heartbeat("prediction", {}, 10s);
+  REQUIRE(hb);
+  const pid_t first = hb->pid;
+  CHECK(hb->restarts == 0);
 
   // The publisher: a stack every 10 ms whatever happens to the subscriber; each publish call is timed.
   int64_t frame = 0;
@@ -53,22 +55,26 @@ TEST_CASE("kill -9 of the prediction under the launcher: heartbeat back within 2
       ++frame;
       bricklayer::stack_t s = prediction::sample_stack(10, static_cast<uint32_t>(frame), frame, frame);
       auto t0 = Clock::now();
-      REQUIRE(bus.lcm().publish(channel(kStackChannel), &s) == 0);
+      REQUIRE(harness::publish(bus, channel(kStackChannel), s));
       slowest_publish_ms = std::max(slowest_publish_ms, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-      bus.pump(10ms);
+      rec.pump_for(10ms);
       if (until && until()) return true;
     }
     return false;
   };
   publish_for(500ms, nullptr);
-  const size_t answered_before = bus.count(channel(kPredictionChannel));
+  const size_t answered_before = rec.count(channel(kPredictionChannel));
   CHECK(answered_before > 10);
 
   REQUIRE(::kill(first, SIGKILL) == 0);
   const auto killed_at = Clock::now();
   const int64_t frame_at_kill = frame;
   heartbeat_t back{};
-  bool restarted = publish_for(5s, [&] { return bus.last_heartbeat("prediction", back) && back.pid != first; });
+  bool restarted = publish_for(5s, [&] {
+    const auto newest = rec.last_heartbeat("prediction");
+    if (newest) back = *newest;
+    return newest && newest->pid != first;
+  });
   const double seconds_to_heartbeat = std::chrono::duration<double>(Clock::now() - killed_at).count();
   REQUIRE(restarted);
   INFO("heartbeat of the restarted prediction after " << seconds_to_heartbeat << " s");
@@ -78,10 +84,8 @@ TEST_CASE("kill -9 of the prediction under the launcher: heartbeat back within 2
   // Predictions resume: answers to stacks sent after the restart.
   int64_t frame_after_restart = frame;
   bool resumed = publish_for(3s, [&] {
-    for (const auto& m : bus.on(channel(kPredictionChannel))) {
-      prediction_t p{};
-      if (test::decode(m.bytes, p) && p.frame_number > frame_after_restart) return true;
-    }
+    for (const prediction_t& p : rec.all<prediction_t>(channel(kPredictionChannel)))
+      if (p.frame_number > frame_after_restart) return true;
     return false;
   });
   CHECK(resumed);
@@ -106,16 +110,16 @@ TEST_CASE("a hung module (heartbeat stops) is killed and restarted") {
   auto profile = dir.write("p.json", R"({"modules":[
       {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"],"heartbeat_timeout_s":1.5}]})");
   auto launcher = launch(dir, profile);
-  test::Listener bus;
-  REQUIRE(bus.ok());
-  bus.listen(channel(kHeartbeatChannel));
-  heartbeat_t hb{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", hb); }, 10s));
-  const pid_t hung = hb.pid;
+  runtime::LcmBus bus(harness::kLiveUrl);
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(bus, {channel(kHeartbeatChannel)});
+  const auto hb = rec.wait_for_heartbeat("prediction", {}, 10s);
+  REQUIRE(hb);
+  const pid_t hung = hb->pid;
   REQUIRE(::kill(hung, SIGSTOP) == 0);  // alive but silent
-  heartbeat_t back{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", back) && back.pid != hung; }, 8s));
-  CHECK(back.restarts == 1);
+  const auto back = rec.wait_for_heartbeat("prediction", [&](const heartbeat_t& h) { return h.pid != hung; }, 8s);
+  REQUIRE(back);
+  CHECK(back->restarts == 1);
   launcher.signal(SIGTERM);
   REQUIRE(launcher.wait_for(15s));
   std::string out = dir.read("launch.out");
@@ -130,37 +134,35 @@ TEST_CASE("the operator's restart (RESTART_MODULE HOST/NAME) stops a module and 
   auto profile = dir.write("p.json", R"({"modules":[
       {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"],"restart":"on-failure"}]})");
   auto launcher = launch(dir, profile, {"--host-name", "camera-host"});
-  test::Listener bus;
-  REQUIRE(bus.ok());
-  bus.listen(channel(kHeartbeatChannel));
-  heartbeat_t hb{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", hb); }, 10s));
-  const pid_t first = hb.pid;
+  runtime::LcmBus bus(harness::kLiveUrl);
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(bus, {channel(kHeartbeatChannel)});
+  auto hb = rec.wait_for_heartbeat("prediction", {}, 10s);
+  REQUIRE(hb);
+  const pid_t first = hb->pid;
   auto send = [&](const std::string& argument) {
     command_t c{};
     c.command = command_t::RESTART_MODULE;
     c.argument = argument;
     c.sequence = -1;
-    REQUIRE(bus.lcm().publish(channel(kCommandChannel), &c) == 0);
+    REQUIRE(harness::publish(bus, channel(kCommandChannel), c));
   };
   // Another host's module and a module this host does not run: nothing restarts.
   send("projector-host/prediction");
   send("camera-host/no-such-module");
-  bus.pump(1500ms);
-  REQUIRE(bus.last_heartbeat("prediction", hb));
-  CHECK(hb.pid == first);
+  rec.pump_for(1500ms);
+  hb = rec.last_heartbeat("prediction");
+  REQUIRE(hb);
+  CHECK(hb->pid == first);
 
   send("camera-host/prediction");
-  heartbeat_t back{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", back) && back.pid != first; }, 10s));
-  CHECK(back.restarts == 1);
+  const auto back = rec.wait_for_heartbeat("prediction", [&](const heartbeat_t& h) { return h.pid != first; }, 10s);
+  REQUIRE(back);
+  CHECK(back->restarts == 1);
   CHECK(::kill(first, 0) != 0);
-  heartbeat_t own{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("launcher", own); }, 3s));
-  double unknown = -1;
-  for (int i = 0; i < own.num_values; ++i)
-    if (own.value_names[i] == "restart_requests_unknown") unknown = own.values[i];
-  CHECK(unknown == 1);
+  // The launcher's newest heartbeat once one came after the restart was asked for.
+  REQUIRE(rec.wait_until([&] { return rec.last_heartbeat("launcher").has_value(); }, 3s));
+  CHECK(harness::heartbeat_value(*rec.last_heartbeat("launcher"), "restart_requests_unknown") == 1);
   launcher.signal(SIGTERM);
   REQUIRE(launcher.wait_for(15s));
   const std::string out = dir.read("launch.out");
@@ -176,7 +178,7 @@ TEST_CASE("launch/bricklayer runs a profile with the build's binaries and stops 
   launcher::SpawnOptions o;
   o.stdout_path = (dir.path / "wrapper.out").string();
   o.merge_stderr = true;
-  o.env = {std::string("BRICKLAYER_BUILD_DIR=") + BRICKLAYER_BINARY_DIR, std::string("LCM_DEFAULT_URL=") + test::kTestUrl};
+  o.env = {"BRICKLAYER_BUILD_DIR=" + harness::binary_dir().string(), std::string("LCM_DEFAULT_URL=") + harness::kLiveUrl};
   auto wrapper = launcher::Process::spawn(
       {std::string(BRICKLAYER_SOURCE_DIR) + "/launch/bricklayer", profile.string(), "--duration", "1"}, o);
   auto st = wrapper.wait_for(20s);
@@ -237,13 +239,12 @@ TEST_CASE("a module that keeps exiting before it comes up is retried with a capp
       {"name":"broken","command":["/bin/false"],"heartbeat":"broken","backoff_max_s":0.4},
       {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]}]})");
   auto launcher = launch(dir, profile, {"--duration", "5"});
-  test::Listener bus;
-  REQUIRE(bus.ok());
-  bus.listen(channel(launcher::kHostStateChannel));
-  bus.listen(channel(kHeartbeatChannel));
-  heartbeat_t hb{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", hb); }, 10s));
-  bus.pump_until([&] { return !launcher.running(); }, 10s);  // listening to the host state meanwhile
+  runtime::LcmBus bus(harness::kLiveUrl);
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(bus, {channel(launcher::kHostStateChannel), channel(kHeartbeatChannel)});
+  const auto hb = rec.wait_for_heartbeat("prediction", {}, 10s);
+  REQUIRE(hb);
+  rec.wait_until([&] { return !launcher.running(); }, 10s);  // listening to the host state meanwhile
   auto st = launcher.wait_for(20s);
   REQUIRE(st);
   std::string out = dir.read("launch.out");
@@ -260,9 +261,8 @@ TEST_CASE("a module that keeps exiting before it comes up is retried with a capp
   // The host state named it down the whole time, and the prediction up with its real pid.
   host_state_t hs{};
   bool seen = false;
-  for (const auto& msg : bus.on(channel(launcher::kHostStateChannel))) {
-    host_state_t one{};
-    if (test::decode(msg.bytes, one) && one.num_modules == 2 && one.modules[1].state == module_state_t::STATE_UP) {
+  for (const host_state_t& one : rec.all<host_state_t>(channel(launcher::kHostStateChannel))) {
+    if (one.num_modules == 2 && one.modules[1].state == module_state_t::STATE_UP) {
       hs = one;
       seen = true;
     }
@@ -274,7 +274,7 @@ TEST_CASE("a module that keeps exiting before it comes up is retried with a capp
   CHECK(hs.modules[0].name == "broken");
   CHECK((hs.modules[0].state == module_state_t::STATE_RESTARTING || hs.modules[0].state == module_state_t::STATE_STARTING));
   CHECK(hs.modules[0].last_exit == "exit code 1");
-  CHECK(hs.modules[1].pid == hb.pid);
+  CHECK(hs.modules[1].pid == hb->pid);
 }
 
 TEST_CASE("the summary and the host state add up a module's counters across its restarts") {
@@ -282,40 +282,39 @@ TEST_CASE("the summary and the host state add up a module's counters across its 
   auto profile = dir.write("p.json", R"({"modules":[
       {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]}]})");
   auto launcher = launch(dir, profile);
-  test::Listener bus;
-  REQUIRE(bus.ok());
-  bus.listen(channel(kHeartbeatChannel));
-  bus.listen(channel(launcher::kHostStateChannel));
-  heartbeat_t hb{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", hb); }, 10s));
+  runtime::LcmBus bus(harness::kLiveUrl);
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(bus, {channel(kHeartbeatChannel), channel(launcher::kHostStateChannel)});
+  const auto hb = rec.wait_for_heartbeat("prediction", {}, 10s);
+  REQUIRE(hb);
   int64_t frame = 0;
   // Sends n stacks, then waits until the prediction's own heartbeat counts them all.
   auto send = [&](int n, pid_t pid) {
     for (int i = 0; i < n; ++i) {
       ++frame;
       bricklayer::stack_t s = prediction::sample_stack(5, static_cast<uint32_t>(frame), frame, frame);
-      REQUIRE(bus.lcm().publish(channel(kStackChannel), &s) == 0);
-      bus.pump(5ms);
+      REQUIRE(harness::publish(bus, channel(kStackChannel), s));
+      rec.pump_for(5ms);
     }
-    heartbeat_t now{};
-    return bus.pump_until([&] { return bus.last_heartbeat("prediction", now) && now.pid == pid && now.received == n; }, 5s);
+    return rec.wait_until([&] {
+      const auto now = rec.last_heartbeat("prediction");
+      return now && now->pid == pid && now->received == n;
+    }, 5s);
   };
-  REQUIRE(send(40, hb.pid));
-  const pid_t first = hb.pid;
+  REQUIRE(send(40, hb->pid));
+  const pid_t first = hb->pid;
   REQUIRE(::kill(first, SIGKILL) == 0);
-  heartbeat_t back{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", back) && back.pid != first; }, 8s));
-  REQUIRE(send(25, back.pid));
+  const auto back = rec.wait_for_heartbeat("prediction", [&](const heartbeat_t& h) { return h.pid != first; }, 8s);
+  REQUIRE(back);
+  REQUIRE(send(25, back->pid));
   // The host state: 65 received by the module, though its current process says 25.
-  bus.messages.clear();
-  host_state_t hs{};
-  REQUIRE(bus.pump_until([&] {
-    for (const auto& m : bus.on(channel(launcher::kHostStateChannel)))
-      if (test::decode(m.bytes, hs) && hs.num_modules == 1 && hs.modules[0].received == 65) return true;
-    return false;
-  }, 5s));
-  CHECK(hs.modules[0].restarts == 1);
-  CHECK(hs.modules[0].pid == back.pid);
+  rec.clear();
+  const auto hs = rec.wait_for<host_state_t>(channel(launcher::kHostStateChannel), [](const host_state_t& h) {
+    return h.num_modules == 1 && h.modules[0].received == 65;
+  }, 5s);
+  REQUIRE(hs);
+  CHECK(hs->modules[0].restarts == 1);
+  CHECK(hs->modules[0].pid == back->pid);
   launcher.signal(SIGTERM);
   REQUIRE(launcher.wait_for(15s));
   std::string out = dir.read("launch.out");
@@ -366,28 +365,25 @@ TEST_CASE("a camera absent at boot: the exhibit runs, the camera waits with the 
       {"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]},
       {"name":"camera","command":["bricklayer-camera","--device","/dev/video-none"]}]})");
   auto launcher = launch(dir, profile);
-  test::Listener bus;
-  REQUIRE(bus.ok());
-  bus.listen(channel(kHeartbeatChannel));
-  bus.listen(channel(launcher::kHostStateChannel));
-  heartbeat_t first{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("camera", first); }, 10s));
-  bus.pump(6s);  // beyond the old launcher's 3 quick tries
+  runtime::LcmBus bus(harness::kLiveUrl);
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(bus, {channel(kHeartbeatChannel), channel(launcher::kHostStateChannel)});
+  const auto first = rec.wait_for_heartbeat("camera", {}, 10s);
+  REQUIRE(first);
+  rec.pump_for(6s);  // beyond the old launcher's 3 quick tries
   REQUIRE(launcher.running());
-  heartbeat_t later{};
-  REQUIRE(bus.last_heartbeat("camera", later));
-  CHECK(later.pid == first.pid);
-  CHECK(later.restarts == 0);
-  CHECK(later.status.rfind("waiting for camera /dev/video-none: cannot open camera", 0) == 0);
-  host_state_t hs{};
-  auto all = bus.on(channel(launcher::kHostStateChannel));
-  REQUIRE(!all.empty());
-  REQUIRE(test::decode(all.back().bytes, hs));
-  REQUIRE(hs.num_modules == 2);
-  CHECK(hs.modules[1].name == "camera");
-  CHECK(hs.modules[1].state == module_state_t::STATE_UP);
-  CHECK(hs.modules[1].status == later.status);
-  CHECK(hs.modules[1].restarts == 0);
+  const auto later = rec.last_heartbeat("camera");
+  REQUIRE(later);
+  CHECK(later->pid == first->pid);
+  CHECK(later->restarts == 0);
+  CHECK(later->status.rfind("waiting for camera /dev/video-none: cannot open camera", 0) == 0);
+  const auto hs = rec.newest<host_state_t>(channel(launcher::kHostStateChannel));
+  REQUIRE(hs);
+  REQUIRE(hs->num_modules == 2);
+  CHECK(hs->modules[1].name == "camera");
+  CHECK(hs->modules[1].state == module_state_t::STATE_UP);
+  CHECK(hs->modules[1].status == later->status);
+  CHECK(hs->modules[1].restarts == 0);
   launcher.signal(SIGTERM);
   auto st = launcher.wait_for(15s);
   REQUIRE(st);

@@ -10,7 +10,8 @@
 #include <vector>
 
 #include "bricklayer/launcher/process.h"
-#include "../bus/bus_test_util.h"
+#include "harness/live_bus.h"
+#include "harness/scratch.h"
 
 namespace bricklayer::test {
 
@@ -40,8 +41,8 @@ struct TempDir {
 // bricklayer-launch on profile with the build's binaries, the test bus, output in launch<tag>.out/.err.
 inline launcher::Process launch(const TempDir& dir, const std::filesystem::path& profile, std::vector<std::string> extra = {},
                                 const std::string& tag = "") {
-  std::vector<std::string> argv = {bin("bricklayer-launch"), "--root", dir.path.string(), "--bin-dir",
-                                   std::string(BRICKLAYER_BINARY_DIR) + "/bin", "--lcm-url", kTestUrl, profile.string()};
+  std::vector<std::string> argv = {harness::program_path("bricklayer-launch"), "--root", dir.path.string(), "--bin-dir",
+                                   (harness::binary_dir() / "bin").string(), "--lcm-url", harness::kLiveUrl, profile.string()};
   argv.insert(argv.end(), extra.begin(), extra.end());
   launcher::SpawnOptions o;
   o.stdout_path = (dir.path / ("launch" + tag + ".out")).string();

@@ -10,14 +10,19 @@
 
 #include <cstdlib>
 #include <map>
+#include <optional>
 #include <thread>
 
+#include "bricklayer/common/channels.h"
+#include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/host_state_t.hpp"
 #include "bricklayer/image_t.hpp"
 #include "bricklayer/launcher/supervisor.h"
 #include "bricklayer/prediction/sample_stacks.h"
 #include "bricklayer/prediction_t.hpp"
+#include "bricklayer/runtime/lcm_bus.h"
 #include "bricklayer/stack_t.hpp"
+#include "harness/recorder.h"
 #include "launcher_test_util.h"
 
 using namespace bricklayer;
@@ -39,13 +44,12 @@ TEST_CASE("an interface down for 7 s and up again: the launcher puts the route b
   auto launcher = test::launch(dir, profile, {"--multicast-route", "lo"});
   pid_t prediction = 0, camera = 0;
   {
-    test::Listener bus;
-    REQUIRE(bus.ok());
-    bus.listen(channel(kHeartbeatChannel));
-    heartbeat_t p{}, c{};
-    REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", p) && bus.last_heartbeat("camera", c); }, 15s));
-    prediction = p.pid;
-    camera = c.pid;
+    runtime::LcmBus bus(harness::kLiveUrl);
+    REQUIRE(bus.open());
+    harness::Recorder rec = harness::Recorder::live(bus, {channel(kHeartbeatChannel)});
+    REQUIRE(rec.wait_until([&] { return rec.last_heartbeat("prediction") && rec.last_heartbeat("camera"); }, 15s));
+    prediction = rec.last_heartbeat("prediction")->pid;
+    camera = rec.last_heartbeat("camera")->pid;
   }
   REQUIRE(sh("ip link set lo down") == 0);
   // Longer than the 5 s heartbeat timeout: a launcher that judged silence on a deaf bus would kill both.
@@ -61,33 +65,28 @@ TEST_CASE("an interface down for 7 s and up again: the launcher puts the route b
     if (!route_back) std::this_thread::sleep_for(100ms);
   }
   REQUIRE(route_back);
-  test::Listener bus;  // a new socket: the old one's membership went with the link
-  REQUIRE(bus.ok());
-  bus.listen(channel(kHeartbeatChannel));
-  bus.listen(channel(kPredictionChannel));
-  bus.listen(channel(kImageChannel));
-  bus.listen(channel(launcher::kHostStateChannel));
+  runtime::LcmBus bus(harness::kLiveUrl);  // a new socket: the old one's membership went with the link
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(
+      bus, {channel(kHeartbeatChannel), channel(kPredictionChannel), channel(kImageChannel), channel(launcher::kHostStateChannel)});
   int64_t frame = 1000;
-  bool predicted = bus.pump_until([&] {
+  bool predicted = rec.wait_until([&] {
     ++frame;
     bricklayer::stack_t s = prediction::sample_stack(5, static_cast<uint32_t>(frame), frame, frame);
-    bus.lcm().publish(channel(kStackChannel), &s);
-    return bus.count(channel(kPredictionChannel)) > 0 && bus.count(channel(kImageChannel)) > 3;
+    harness::publish(bus, channel(kStackChannel), s);
+    return rec.count(channel(kPredictionChannel)) > 0 && rec.count(channel(kImageChannel)) > 3;
   }, 15s);
   const double resumed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - up_at).count();
   INFO(dir.read("launch.out") << dir.read("launch.err"));
   REQUIRE(predicted);
   INFO("publishing again " << resumed_s << " s after the interface came back");
-  heartbeat_t p{}, c{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat("prediction", p) && bus.last_heartbeat("camera", c); }, 3s));
+  REQUIRE(rec.wait_until([&] { return rec.last_heartbeat("prediction") && rec.last_heartbeat("camera"); }, 3s));
+  const heartbeat_t p = *rec.last_heartbeat("prediction"), c = *rec.last_heartbeat("camera");
   CHECK(p.pid == prediction);  // never killed, never restarted
   CHECK(c.pid == camera);
   CHECK(p.restarts == 0);
-  host_state_t hs{};
-  REQUIRE(bus.pump_until([&] {
-    auto all = bus.on(channel(launcher::kHostStateChannel));
-    return !all.empty() && test::decode(all.back().bytes, hs);
-  }, 3s));
+  REQUIRE(rec.wait_until([&] { return rec.newest<host_state_t>(channel(launcher::kHostStateChannel)).has_value(); }, 3s));
+  const host_state_t hs = *rec.newest<host_state_t>(channel(launcher::kHostStateChannel));
   REQUIRE(hs.num_modules == 2);
   CHECK(hs.modules[0].restarts == 0);
   CHECK(hs.modules[1].restarts == 0);
@@ -108,15 +107,15 @@ TEST_CASE("the whole demo through an interface down 7 s and up: every module res
   auto launcher = test::launch(dir, dir.path / "launch" / "profiles" / "demo.json", {"--multicast-route", "lo", "--duration", "120"});
   std::map<std::string, int32_t> pids;
   {
-    test::Listener bus;
-    REQUIRE(bus.ok());
-    bus.listen(channel(launcher::kHostStateChannel));
-    host_state_t hs{};
-    REQUIRE(bus.pump_until([&] {
-      auto all = bus.on(channel(launcher::kHostStateChannel));
-      return !all.empty() && test::decode(all.back().bytes, hs) && hs.num_modules == 5 && hs.modules_up == 5;
+    runtime::LcmBus bus(harness::kLiveUrl);
+    REQUIRE(bus.open());
+    harness::Recorder rec = harness::Recorder::live(bus, {channel(launcher::kHostStateChannel)});
+    std::optional<host_state_t> hs;
+    REQUIRE(rec.wait_until([&] {
+      hs = rec.newest<host_state_t>(channel(launcher::kHostStateChannel));
+      return hs && hs->num_modules == 5 && hs->modules_up == 5;
     }, 30s));
-    for (const auto& m : hs.modules) pids[m.name] = m.pid;
+    for (const auto& m : hs->modules) pids[m.name] = m.pid;
   }
   REQUIRE(sh("ip link set lo down") == 0);
   std::this_thread::sleep_for(7s);
@@ -128,21 +127,19 @@ TEST_CASE("the whole demo through an interface down 7 s and up: every module res
   }
   REQUIRE(route_back);
 
-  test::Listener bus;
-  REQUIRE(bus.ok());
-  bus.listen(channel(launcher::kHostStateChannel));
-  bus.listen(channel(kPredictionChannel));
-  bus.listen(channel(kImageChannel));
-  bus.listen(channel(kStackChannel));
-  host_state_t hs{};
-  const bool resumed = bus.pump_until([&] {
-    auto all = bus.on(channel(launcher::kHostStateChannel));
-    return !all.empty() && test::decode(all.back().bytes, hs) && hs.modules_up == 5 && bus.count(channel(kImageChannel)) > 5 &&
-           bus.count(channel(kStackChannel)) > 5 && bus.count(channel(kPredictionChannel)) > 5;
+  runtime::LcmBus bus(harness::kLiveUrl);
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(
+      bus, {channel(launcher::kHostStateChannel), channel(kPredictionChannel), channel(kImageChannel), channel(kStackChannel)});
+  std::optional<host_state_t> hs;
+  const bool resumed = rec.wait_until([&] {
+    hs = rec.newest<host_state_t>(channel(launcher::kHostStateChannel));
+    return hs && hs->modules_up == 5 && rec.count(channel(kImageChannel)) > 5 && rec.count(channel(kStackChannel)) > 5 &&
+           rec.count(channel(kPredictionChannel)) > 5;
   }, 30s);
   INFO(dir.read("launch.out") << dir.read("launch.err"));
   REQUIRE(resumed);  // simcam -> vision -> prediction flows again
-  for (const auto& m : hs.modules) {
+  for (const auto& m : hs->modules) {
     INFO(m.name << ": " << m.status);
     CHECK(m.pid == pids[m.name]);
     CHECK(m.restarts == 0);

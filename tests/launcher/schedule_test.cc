@@ -8,9 +8,12 @@
 
 #include <catch2/catch.hpp>
 
+#include "bricklayer/common/channels.h"
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/host_state_t.hpp"
 #include "bricklayer/launcher/supervisor.h"
+#include "bricklayer/runtime/lcm_bus.h"
+#include "harness/recorder.h"
 #include "launcher_test_util.h"
 
 using namespace bricklayer;
@@ -36,36 +39,32 @@ TEST_CASE("opening hours and the nightly restart under the launcher's test clock
     {"name": "kept", "command": ["/bin/sleep", "1000"], "heartbeat": "", "when_closed": "run"},
     {"name": "prediction", "command": ["bricklayer-prediction", "--log-level", "warn"]}
   ]})");
-  std::vector<std::string> argv = {test::bin("bricklayer-launch"), "--root", dir.path.string(), "--bin-dir",
-                                   std::string(BRICKLAYER_BINARY_DIR) + "/bin", "--lcm-url", test::kTestUrl,
+  std::vector<std::string> argv = {harness::program_path("bricklayer-launch"), "--root", dir.path.string(), "--bin-dir",
+                                   (harness::binary_dir() / "bin").string(), "--lcm-url", harness::kLiveUrl,
                                    "--host-name", "hours-host", profile.string()};
   launcher::SpawnOptions o;
   o.stdout_path = (dir.path / "launch.out").string();
   o.stderr_path = (dir.path / "launch.err").string();
   o.env = {"DISPLAY=", "BRICKLAYER_LAUNCHER_CLOCK=Wed 09:59:00 x30"};
 
-  test::Listener bus;
-  REQUIRE(bus.ok());
-  bus.listen(channel(launcher::kHostStateChannel));
-  bus.listen(channel(kHeartbeatChannel));
+  runtime::LcmBus bus(harness::kLiveUrl);
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(bus, {channel(launcher::kHostStateChannel), channel(kHeartbeatChannel)});
   launcher::Process launch = launcher::Process::spawn(argv, o);
 
   host_state_t last{};
   heartbeat_t launcher_beat{};
   auto pump_for = [&](const std::function<bool(const host_state_t&)>& pred, std::chrono::milliseconds timeout) {
-    return bus.pump_until([&] {
+    return rec.wait_until([&] {
       bool hit = false;
-      for (const auto& m : bus.on(channel(kHeartbeatChannel))) {
-        heartbeat_t hb{};
-        if (test::decode(m.bytes, hb) && hb.module == "launcher" && hb.pid == launch.pid()) launcher_beat = hb;
-      }
-      for (const auto& m : bus.on(channel(launcher::kHostStateChannel))) {
-        host_state_t hs{};
-        if (!test::decode(m.bytes, hs) || hs.launcher_pid != launch.pid()) continue;
+      for (const heartbeat_t& hb : rec.all<heartbeat_t>(channel(kHeartbeatChannel)))
+        if (hb.module == "launcher" && hb.pid == launch.pid()) launcher_beat = hb;
+      for (const host_state_t& hs : rec.all<host_state_t>(channel(launcher::kHostStateChannel))) {
+        if (hs.launcher_pid != launch.pid()) continue;
         last = hs;
         if (pred(hs)) hit = true;
       }
-      bus.messages.clear();
+      rec.clear();
       return hit;
     }, timeout);
   };

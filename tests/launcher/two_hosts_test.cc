@@ -9,18 +9,20 @@
 #include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <thread>
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "bricklayer/common/channels.h"
+#include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/host_state_t.hpp"
 #include "bricklayer/image_t.hpp"
 #include "bricklayer/launcher/supervisor.h"
+#include "bricklayer/runtime/lcm_bus.h"
 #include "harness/program.h"
+#include "harness/recorder.h"
 #include "harness/scratch.h"
-#include "../bus/bus_test_util.h"
 
 using namespace bricklayer;
 using namespace std::chrono_literals;
@@ -60,18 +62,15 @@ struct Host {
   harness::Program launch(const fs::path& root, const std::string& name, const std::string& dev) {
     return harness::Program("/usr/bin/nsenter",
                             {"-t", pid, "-n", harness::program_path("bricklayer-launch"), "--root", root.string(), "--bin-dir",
-                             std::string(BRICKLAYER_BINARY_DIR) + "/bin", "--lcm-url", kLanUrl, "--host-name", name,
+                             (harness::binary_dir() / "bin").string(), "--lcm-url", kLanUrl, "--host-name", name,
                              "--multicast-route", dev, (root / (name + ".json")).string()},
                             harness::ProgramOptions{{"DISPLAY="}, ""});
   }
 };
 
-std::map<std::string, host_state_t> newest_states(const test::Listener& bus) {
+std::map<std::string, host_state_t> newest_states(const harness::Recorder& rec) {
   std::map<std::string, host_state_t> out;
-  for (const auto& m : bus.on(channel(launcher::kHostStateChannel))) {
-    host_state_t hs{};
-    if (test::decode(m.bytes, hs)) out[hs.host] = hs;
-  }
+  for (const host_state_t& hs : rec.all<host_state_t>(channel(launcher::kHostStateChannel))) out[hs.host] = hs;
   return out;
 }
 
@@ -82,10 +81,10 @@ TEST_CASE("two hosts over a veth: an observer sees both hosts' state, and after 
   fs::create_directories(root.path() / "frames");
   for (int k = 0; k < 3; ++k)
     cv::imwrite((root.path() / "frames" / ("f" + std::to_string(k) + ".png")).string(), cv::Mat(60, 80, CV_8UC3, cv::Scalar::all(40 * k)));
-  std::ofstream(root.path() / "camera-host.json")
-      << R"({"modules":[{"name":"camera","command":["bricklayer-camera","--images","frames","--loop","--fps","10"]}]})";
-  std::ofstream(root.path() / "projector-host.json")
-      << R"({"modules":[{"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]}]})";
+  harness::write_file(root / "camera-host.json",
+                      R"({"modules":[{"name":"camera","command":["bricklayer-camera","--images","frames","--loop","--fps","10"]}]})");
+  harness::write_file(root / "projector-host.json",
+                      R"({"modules":[{"name":"prediction","command":["bricklayer-prediction","--log-level","warn"]}]})");
   Host camera, projector;
   sh("ip link add blcam type veth peer name blproj");
   camera.configure("blcam", "10.202.0.1/24");
@@ -101,11 +100,11 @@ TEST_CASE("two hosts over a veth: an observer sees both hosts' state, and after 
   std::map<std::string, host_state_t> states;
   pid_t camera_pid = 0;
   {
-    test::Listener bus(kLanUrl);
-    REQUIRE(bus.ok());
-    bus.listen(channel(launcher::kHostStateChannel));
-    REQUIRE(bus.pump_until([&] {
-      states = newest_states(bus);
+    runtime::LcmBus bus(kLanUrl);
+    REQUIRE(bus.open());
+    harness::Recorder rec = harness::Recorder::live(bus, {channel(launcher::kHostStateChannel)});
+    REQUIRE(rec.wait_until([&] {
+      states = newest_states(rec);
       return states.size() == 2 && states["camera-host"].modules_up == 1 && states["projector-host"].modules_up == 1;
     }, 20s));
     camera_pid = states["camera-host"].modules[0].pid;
@@ -120,13 +119,12 @@ TEST_CASE("two hosts over a veth: an observer sees both hosts' state, and after 
   std::this_thread::sleep_for(7s);
   camera.in("ip link set blcam up");
 
-  test::Listener bus(kLanUrl);
-  REQUIRE(bus.ok());
-  bus.listen(channel(launcher::kHostStateChannel));
-  bus.listen(channel(kImageChannel));
-  REQUIRE(bus.pump_until([&] {
-    states = newest_states(bus);
-    return states.count("camera-host") && bus.count(channel(kImageChannel)) > 3;
+  runtime::LcmBus bus(kLanUrl);
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(bus, {channel(launcher::kHostStateChannel), channel(kImageChannel)});
+  REQUIRE(rec.wait_until([&] {
+    states = newest_states(rec);
+    return states.count("camera-host") && rec.count(channel(kImageChannel)) > 3;
   }, 20s));
   const host_state_t& cam = states["camera-host"];
   REQUIRE(cam.num_modules == 1);

@@ -11,18 +11,19 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <numeric>
-#include <sstream>
 
 #include "bricklayer/common/channels.h"
 #include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/image_t.hpp"
-#include "bricklayer/launcher/process.h"
-#include "../bus/bus_test_util.h"
-#include "../common/spawn_util.h"
+#include "bricklayer/runtime/codec.h"
+#include "bricklayer/runtime/lcm_bus.h"
+#include "harness/live_bus.h"
+#include "harness/program.h"
+#include "harness/recorder.h"
+#include "harness/scratch.h"
 
 using namespace bricklayer;
 using namespace std::chrono_literals;
@@ -30,77 +31,52 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& tag) {
-    path = fs::temp_directory_path() / ("bricklayer-logger-proc-" + tag + "-" + std::to_string(::getpid()));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string read(const std::string& name) const {
-    std::ifstream in(path / name);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
-};
+using harness::ScratchDir;
 
-double value_of(const heartbeat_t& hb, const std::string& name) {
-  for (size_t i = 0; i < hb.value_names.size() && i < hb.values.size(); ++i)
-    if (hb.value_names[i] == name) return hb.values[i];
-  return -1;
-}
+double value_of(const heartbeat_t& hb, const std::string& name) { return harness::heartbeat_value(hb, name).value_or(-1); }
 
 // A bricklayer-logger process and a view of its heartbeats.
 class LoggerUnderTest {
  public:
-  LoggerUnderTest(const TempDir& dir, std::vector<std::string> args) : dir_(dir) {
-    listener_.listen(channel(kHeartbeatChannel));
-    std::vector<std::string> argv = {test::program("bricklayer-logger"), "--lcm-url", test::kTestUrl};
-    argv.insert(argv.end(), args.begin(), args.end());
-    launcher::SpawnOptions o;
-    o.stdout_path = (dir.path / "logger.out").string();
-    o.stderr_path = (dir.path / "logger.err").string();
-    proc_ = launcher::Process::spawn(argv, o);
+  explicit LoggerUnderTest(std::vector<std::string> args) {
+    args.insert(args.begin(), {"--lcm-url", harness::kLiveUrl});
+    proc_ = std::make_unique<harness::Program>("bricklayer-logger", std::move(args));
     // Subscribed once it beats: from then on nothing may be missed.
     REQUIRE(wait_heartbeat([](const heartbeat_t&) { return true; }, 10s));
   }
   // Pumps until the newest heartbeat of this process satisfies pred.
   bool wait_heartbeat(const std::function<bool(const heartbeat_t&)>& pred, std::chrono::milliseconds timeout) {
-    return listener_.pump_until([&] { return last_ok() && pred(last_); }, timeout);
+    return rec_.wait_until([&] { return last_ok() && pred(last_); }, timeout);
   }
   const heartbeat_t& last() {
     last_ok();
     return last_;
   }
-  launcher::Process& proc() { return proc_; }
+  harness::Program& proc() { return *proc_; }
   // SIGTERM; the exit status (the test fails when it needs SIGKILL).
   launcher::ExitStatus stop() {
-    proc_.signal(SIGTERM);
-    auto st = proc_.wait_for(10s);
+    proc_->signal(SIGTERM);
+    auto st = proc_->wait_exit(10s);
     REQUIRE(st);
     return *st;
   }
-  std::string stderr_text() const { return dir_.read("logger.err"); }
+  std::string stderr_text() const { return proc_->stderr_text(); }
 
  private:
   bool last_ok() {
-    for (auto it = listener_.messages.rbegin(); it != listener_.messages.rend(); ++it) {
-      heartbeat_t hb{};
-      if (test::decode(it->bytes, hb) && hb.module == "logger" && hb.pid == proc_.pid()) {
-        last_ = hb;
+    const auto& messages = rec_.messages();
+    for (auto it = messages.rbegin(); it != messages.rend(); ++it) {
+      const auto hb = runtime::decode<heartbeat_t>(it->bytes);
+      if (hb && hb->module == "logger" && hb->pid == proc_->pid()) {
+        last_ = *hb;
         return true;
       }
     }
     return false;
   }
-  const TempDir& dir_;
-  test::Listener listener_;
-  launcher::Process proc_;
+  runtime::LcmBus bus_{harness::kLiveUrl};
+  harness::Recorder rec_ = harness::Recorder::live(bus_, {channel(kHeartbeatChannel)});
+  std::unique_ptr<harness::Program> proc_;
   heartbeat_t last_{};
 };
 
@@ -145,26 +121,31 @@ image_t frame(int64_t number, size_t bytes, const std::string& source = "test-ca
   return img;
 }
 
-int run_logger_expecting_exit(const TempDir& dir, std::vector<std::string> args, std::string& err) {
-  std::vector<std::string> argv = {test::program("bricklayer-logger"), "--lcm-url", test::kTestUrl};
-  argv.insert(argv.end(), args.begin(), args.end());
-  launcher::SpawnOptions o;
-  o.stderr_path = (dir.path / "bad.err").string();
-  o.stdout_path = (dir.path / "bad.out").string();
-  auto p = launcher::Process::spawn(argv, o);
-  auto st = p.wait_for(10s);
-  REQUIRE(st);
-  err = dir.read("bad.err");
-  return st->signal ? -st->signal : st->code;
+int run_logger_expecting_exit(std::vector<std::string> args, std::string& err) {
+  args.insert(args.begin(), {"--lcm-url", harness::kLiveUrl});
+  const harness::Ran ran = harness::run_program("bricklayer-logger", std::move(args), 10s);
+  REQUIRE_FALSE(ran.timed_out);
+  err = ran.err;
+  return ran.status.signal ? -ran.status.signal : ran.status.code;
 }
+
+// The test's publisher on the live bus.
+struct Publisher {
+  runtime::LcmBus bus{harness::kLiveUrl};
+  bool raw(const std::string& ch, const std::vector<uint8_t>& data) { return harness::publish_bytes(bus, ch, data); }
+  template <typename T>
+  bool typed(const std::string& ch, const T& msg) {
+    return harness::publish(bus, ch, msg);
+  }
+};
 
 }  // namespace
 
 TEST_CASE("everything published at full rate on several channels is logged exactly once, in order, byte-identical") {
-  TempDir dir("full-rate");
-  LoggerUnderTest logger(dir, {(dir.path / "log").string()});
-  auto pub = std::make_unique<lcm::LCM>(test::kTestUrl);
-  REQUIRE(pub->getFileno() >= 0);
+  ScratchDir dir("full-rate");
+  LoggerUnderTest logger({(dir / "log").string()});
+  Publisher pub;
+  REQUIRE(pub.bus.open());
 
   // 3000 messages round-robin on three channels (64 B, 1 KB, 8 KB) and a 150 KB camera frame (three
   // 64 KB fragments, each lost whole if one piece is) after every 30th: ~24 MB as fast as LCM sends.
@@ -175,12 +156,12 @@ TEST_CASE("everything published at full rate on several channels is logged exact
   for (uint32_t i = 0; i < 3000; ++i) {
     const auto& [ch, size] = channels[i % channels.size()];
     auto data = payload(i, ch, size);
-    REQUIRE(pub->publish(ch, data.data(), static_cast<unsigned>(data.size())) == 0);
+    REQUIRE(pub.raw(ch, data));
     sent[ch].push_back(std::move(data));
     if (i % 30 == 0) {
       image_t img = frame(frames++, 150000);
-      REQUIRE(pub->publish(image_channel, &img) == 0);
-      sent[image_channel].push_back(test::encode(img));
+      REQUIRE(pub.typed(image_channel, img));
+      sent[image_channel].push_back(runtime::encode(img));
     }
   }
   const int64_t total = 3000 + frames;
@@ -189,9 +170,9 @@ TEST_CASE("everything published at full rate on several channels is logged exact
   INFO(logger.stderr_text());
   CHECK(st.clean());
 
-  REQUIRE(fs::exists(dir.path / "log.00"));
-  CHECK_FALSE(fs::exists(dir.path / "log.01"));
-  const auto logged = read_log(dir.path / "log.00");
+  REQUIRE(fs::exists(dir / "log.00"));
+  CHECK_FALSE(fs::exists(dir / "log.01"));
+  const auto logged = read_log(dir / "log.00");
   for (const auto& [ch, msgs] : sent) {
     INFO("channel " << ch);
     const auto got = only(logged, ch);
@@ -211,26 +192,26 @@ TEST_CASE("everything published at full rate on several channels is logged exact
 }
 
 TEST_CASE("rotation (--rotate N --split-mb M): FILE.0 newest, at most N files, each within the size, the newest messages in order") {
-  TempDir dir("rotate");
-  LoggerUnderTest logger(dir, {"--rotate", "3", "--split-mb", "0.05", (dir.path / "log").string()});
-  auto pub = std::make_unique<lcm::LCM>(test::kTestUrl);
+  ScratchDir dir("rotate");
+  LoggerUnderTest logger({"--rotate", "3", "--split-mb", "0.05", (dir / "log").string()});
+  Publisher pub;
   for (uint32_t i = 0; i < 200; ++i) {
     auto data = payload(i, "R", 2000);
-    REQUIRE(pub->publish("TEST_ROTATE", data.data(), static_cast<unsigned>(data.size())) == 0);
+    REQUIRE(pub.raw("TEST_ROTATE", data));
     if (i % 20 == 19) usleep(20000);
   }
   REQUIRE(logger.wait_heartbeat([&](const heartbeat_t& hb) { return hb.received >= 200; }, 20s));
   CHECK(logger.stop().clean());
   for (int k = 0; k < 3; ++k) {
     INFO("file log." << k);
-    REQUIRE(fs::exists(dir.path / ("log." + std::to_string(k))));
-    CHECK(fs::file_size(dir.path / ("log." + std::to_string(k))) <= static_cast<uintmax_t>(0.05 * 1024 * 1024));
+    REQUIRE(fs::exists(dir / ("log." + std::to_string(k))));
+    CHECK(fs::file_size(dir / ("log." + std::to_string(k))) <= static_cast<uintmax_t>(0.05 * 1024 * 1024));
   }
-  CHECK_FALSE(fs::exists(dir.path / "log.3"));
+  CHECK_FALSE(fs::exists(dir / "log.3"));
   // Oldest to newest: a contiguous run of indices ending with the last one published.
   std::vector<uint32_t> indices;
   for (const char* f : {"log.2", "log.1", "log.0"})
-    for (const auto& l : only(read_log(dir.path / f), "TEST_ROTATE"))
+    for (const auto& l : only(read_log(dir / f), "TEST_ROTATE"))
       indices.push_back(l.data[0] | l.data[1] << 8 | l.data[2] << 16 | static_cast<uint32_t>(l.data[3]) << 24);
   REQUIRE(indices.size() >= 40);  // ~3 x 25 messages of 2 KB in 3 files of 50 KB (less the heartbeats')
   CHECK(indices.back() == 199);
@@ -238,19 +219,19 @@ TEST_CASE("rotation (--rotate N --split-mb M): FILE.0 newest, at most N files, e
 }
 
 TEST_CASE("increment (--rotate 0 --split-mb M): FILE.00, FILE.01, ... together hold every message, in order") {
-  TempDir dir("increment");
-  LoggerUnderTest logger(dir, {"--rotate", "0", "--split-mb", "0.05", (dir.path / "log").string()});
-  auto pub = std::make_unique<lcm::LCM>(test::kTestUrl);
+  ScratchDir dir("increment");
+  LoggerUnderTest logger({"--rotate", "0", "--split-mb", "0.05", (dir / "log").string()});
+  Publisher pub;
   for (uint32_t i = 0; i < 200; ++i) {
     auto data = payload(i, "S", 2000);
-    REQUIRE(pub->publish("TEST_SPLIT", data.data(), static_cast<unsigned>(data.size())) == 0);
+    REQUIRE(pub.raw("TEST_SPLIT", data));
   }
   REQUIRE(logger.wait_heartbeat([&](const heartbeat_t& hb) { return hb.received >= 200; }, 20s));
   CHECK(logger.stop().clean());
   std::vector<uint32_t> indices;
   int files = 0;
-  for (int k = 0; fs::exists(dir.path / (k < 10 ? "log.0" + std::to_string(k) : "log." + std::to_string(k))); ++k, ++files) {
-    const fs::path f = dir.path / (k < 10 ? "log.0" + std::to_string(k) : "log." + std::to_string(k));
+  for (int k = 0; fs::exists(dir / (k < 10 ? "log.0" + std::to_string(k) : "log." + std::to_string(k))); ++k, ++files) {
+    const fs::path f = dir / (k < 10 ? "log.0" + std::to_string(k) : "log." + std::to_string(k));
     CHECK(fs::file_size(f) <= static_cast<uintmax_t>(0.05 * 1024 * 1024));
     for (const auto& l : only(read_log(f), "TEST_SPLIT")) indices.push_back(l.data[0] | l.data[1] << 8);
   }
@@ -260,35 +241,35 @@ TEST_CASE("increment (--rotate 0 --split-mb M): FILE.00, FILE.01, ... together h
 }
 
 TEST_CASE("SIGTERM writes and flushes what was received, SIGHUP starts a new file") {
-  TempDir dir("signals");
+  ScratchDir dir("signals");
   // No periodic flush: whatever reaches the disk does so because of the stop.
-  LoggerUnderTest logger(dir, {"--flush-ms", "600000", "--channels", "TEST_SIGNALS", (dir.path / "log").string()});
-  auto pub = std::make_unique<lcm::LCM>(test::kTestUrl);
+  LoggerUnderTest logger({"--flush-ms", "600000", "--channels", "TEST_SIGNALS", (dir / "log").string()});
+  Publisher pub;
   auto send = [&](uint32_t from, uint32_t to) {
     for (uint32_t i = from; i < to; ++i) {
       auto data = payload(i, "T", 60);
-      REQUIRE(pub->publish("TEST_SIGNALS", data.data(), static_cast<unsigned>(data.size())) == 0);
+      REQUIRE(pub.raw("TEST_SIGNALS", data));
     }
   };
   send(0, 10);
   // Queued, not on the disk, and not counted as written: "published" is what reached the file.
   REQUIRE(logger.wait_heartbeat([](const heartbeat_t& hb) { return value_of(hb, "queue_bytes") >= 10 * 100; }, 10s));
   CHECK(logger.last().published == 0);
-  CHECK(fs::file_size(dir.path / "log.00") == 0);
+  CHECK(fs::file_size(dir / "log.00") == 0);
   ::kill(logger.proc().pid(), SIGHUP);
   REQUIRE(logger.wait_heartbeat([](const heartbeat_t& hb) { return value_of(hb, "files") == 2 && hb.published == 10; }, 10s));
-  CHECK(fs::file_size(dir.path / "log.00") == 10 * 100);
+  CHECK(fs::file_size(dir / "log.00") == 10 * 100);
   send(10, 30);
   REQUIRE(logger.wait_heartbeat([](const heartbeat_t& hb) { return value_of(hb, "queue_bytes") >= 20 * 100; }, 10s));
   // Not yet on the disk (no write for 10 minutes), and not counted.
-  CHECK(fs::file_size(dir.path / "log.01") == 0);
+  CHECK(fs::file_size(dir / "log.01") == 0);
   CHECK(logger.last().published == 10);
   const launcher::ExitStatus st = logger.stop();
   INFO(logger.stderr_text());
   CHECK(st.clean());
   auto indices = [&](const char* f) {
     std::vector<int> out;
-    for (const auto& l : only(read_log(dir.path / f), "TEST_SIGNALS")) out.push_back(l.data[0]);
+    for (const auto& l : only(read_log(dir / f), "TEST_SIGNALS")) out.push_back(l.data[0]);
     return out;
   };
   std::vector<int> first(10), second(20);
@@ -300,20 +281,20 @@ TEST_CASE("SIGTERM writes and flushes what was received, SIGHUP starts a new fil
 }
 
 TEST_CASE("exclusion: --exclude keeps the named channels out of the log, logs everything else, and counts what it left out") {
-  TempDir dir("exclude");
-  LoggerUnderTest logger(dir, {"--exclude", "BL_IMAGE|TEST_SECRET.*", (dir.path / "log").string()});
-  auto pub = std::make_unique<lcm::LCM>(test::kTestUrl);
+  ScratchDir dir("exclude");
+  LoggerUnderTest logger({"--exclude", "BL_IMAGE|TEST_SECRET.*", (dir / "log").string()});
+  Publisher pub;
   for (int i = 0; i < 20; ++i) {
     image_t img = frame(i, 20000);
-    pub->publish(channel(kImageChannel), &img);
+    pub.typed(channel(kImageChannel), img);
     auto data = payload(i, "K", 100);
-    pub->publish("TEST_KEEP", data.data(), 100);
-    pub->publish("TEST_SECRET_A", data.data(), 100);
-    pub->publish("BL_IMAGE_THUMB", data.data(), 100);  // a full match is needed: this one is kept
+    pub.raw("TEST_KEEP", data);
+    pub.raw("TEST_SECRET_A", data);
+    pub.raw("BL_IMAGE_THUMB", data);  // a full match is needed: this one is kept
   }
   REQUIRE(logger.wait_heartbeat([](const heartbeat_t& hb) { return value_of(hb, "excluded") >= 40 && hb.received >= 40; }, 10s));
   CHECK(logger.stop().clean());
-  const auto logged = read_log(dir.path / "log.00");
+  const auto logged = read_log(dir / "log.00");
   CHECK(only(logged, "TEST_KEEP").size() == 20);
   CHECK(only(logged, "BL_IMAGE_THUMB").size() == 20);
   CHECK(only(logged, channel(kImageChannel)).empty());
@@ -322,16 +303,16 @@ TEST_CASE("exclusion: --exclude keeps the named channels out of the log, logs ev
 }
 
 TEST_CASE("losses it can see are reported: a gap in a camera's frame numbers, and datagrams the kernel dropped") {
-  TempDir dir("losses");
-  auto pub = std::make_unique<lcm::LCM>(test::kTestUrl);
+  ScratchDir dir("losses");
+  Publisher pub;
   SECTION("frame-number gaps per source, a restarted source is not a loss") {
-    LoggerUnderTest logger(dir, {(dir.path / "log").string()});
+    LoggerUnderTest logger({(dir / "log").string()});
     for (int64_t n : {0, 1, 2, 5, 6, 0, 1}) {
       image_t img = frame(n, 1000);
-      pub->publish(channel(kImageChannel), &img);
+      pub.typed(channel(kImageChannel), img);
     }
     image_t other = frame(100, 1000, "another-camera");
-    pub->publish(channel(kImageChannel), &other);
+    pub.typed(channel(kImageChannel), other);
     // The restart comes after the gap, and each heartbeat carries the whole state.
     REQUIRE(logger.wait_heartbeat([](const heartbeat_t& hb) { return value_of(hb, "source_restarts") >= 1; }, 10s));
     const heartbeat_t& hb = logger.last();
@@ -341,12 +322,12 @@ TEST_CASE("losses it can see are reported: a gap in a camera's frame numbers, an
     CHECK(logger.stop().clean());
   }
   SECTION("a stopped logger with a small receive buffer: the kernel's drops on its socket are counted") {
-    LoggerUnderTest logger(dir, {"--recv-buf-mb", "0.25", (dir.path / "log").string()});
+    LoggerUnderTest logger({"--recv-buf-mb", "0.25", (dir / "log").string()});
     CHECK(value_of(logger.last(), "kernel_drops") == 0);
     logger.proc().signal(SIGSTOP);
     for (uint32_t i = 0; i < 200; ++i) {  // 12 MB into a 0.5 MB buffer nobody reads
       auto data = payload(i, "F", 60000);
-      pub->publish("TEST_FLOOD", data.data(), static_cast<unsigned>(data.size()));
+      pub.raw("TEST_FLOOD", data);
     }
     logger.proc().signal(SIGCONT);
     REQUIRE(logger.wait_heartbeat([](const heartbeat_t& hb) { return value_of(hb, "kernel_drops") > 0; }, 10s));
@@ -356,22 +337,21 @@ TEST_CASE("losses it can see are reported: a gap in a camera's frame numbers, an
 }
 
 TEST_CASE("bad arguments are clear errors (exit 2), an unwritable log is an error at start (exit 1)") {
-  TempDir dir("bad-args");
   std::string err;
-  CHECK(run_logger_expecting_exit(dir, {}, err) == 2);
+  CHECK(run_logger_expecting_exit({}, err) == 2);
   CHECK(err.find("expected 1 argument(s), got 0") != std::string::npos);
-  CHECK(run_logger_expecting_exit(dir, {"--rotate", "-1", "x"}, err) == 2);
+  CHECK(run_logger_expecting_exit({"--rotate", "-1", "x"}, err) == 2);
   CHECK(err.find("--rotate must be in [0, 100000], got -1") != std::string::npos);
-  CHECK(run_logger_expecting_exit(dir, {"--split-mb", "ten", "x"}, err) == 2);
+  CHECK(run_logger_expecting_exit({"--split-mb", "ten", "x"}, err) == 2);
   CHECK(err.find("--split-mb expects a finite number, got 'ten'") != std::string::npos);
-  CHECK(run_logger_expecting_exit(dir, {"--exclude", "BL_(IMAGE", "x"}, err) == 2);
+  CHECK(run_logger_expecting_exit({"--exclude", "BL_(IMAGE", "x"}, err) == 2);
   CHECK(err.find("--exclude 'BL_(IMAGE' is not a valid regular expression") != std::string::npos);
-  CHECK(run_logger_expecting_exit(dir, {"--queue-capacity", "0", "x"}, err) == 2);
+  CHECK(run_logger_expecting_exit({"--queue-capacity", "0", "x"}, err) == 2);
   CHECK(err.find("--queue-capacity must be in [1, 100000000], got 0") != std::string::npos);
-  CHECK(run_logger_expecting_exit(dir, {"--rotat", "3", "x"}, err) == 2);
+  CHECK(run_logger_expecting_exit({"--rotat", "3", "x"}, err) == 2);
   CHECK(err.find("unknown flag --rotat") != std::string::npos);
-  CHECK(run_logger_expecting_exit(dir, {"--lcm-url", "udpm://239.255.76.67:7667?ttl=5", "x"}, err) == 2);
+  CHECK(run_logger_expecting_exit({"--lcm-url", "udpm://239.255.76.67:7667?ttl=5", "x"}, err) == 2);
   CHECK(err.find("ttl") != std::string::npos);
-  CHECK(run_logger_expecting_exit(dir, {"/proc/version/log"}, err) == 1);
+  CHECK(run_logger_expecting_exit({"/proc/version/log"}, err) == 1);
   CHECK(err.find("cannot create the log directory /proc/version") != std::string::npos);
 }

@@ -4,35 +4,21 @@
 // book written by projection holds it with the optimum's score as MAX and its 4 blocks.
 #include <catch2/catch.hpp>
 
-#include <unistd.h>
-
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
-#include "bricklayer/launcher/process.h"
-#include "../bus/bus_test_util.h"
+#include "harness/live_bus.h"
+#include "harness/program.h"
+#include "harness/scratch.h"
 
 using namespace bricklayer;
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
 
-namespace {
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-}  // namespace
-
 TEST_CASE("the demo plays a whole round by itself") {
-  const fs::path dir = fs::temp_directory_path() / ("bricklayer-demo-round-" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  nlohmann::json profile = nlohmann::json::parse(slurp(std::string(BRICKLAYER_SOURCE_DIR) + "/launch/profiles/demo.json"));
+  harness::ScratchDir dir("demo-round");
+  nlohmann::json profile = nlohmann::json::parse(harness::read_file(harness::source_dir() / "launch/profiles/demo.json"));
   profile["logger"]["file"] = (dir / "demo").string();
   bool has_book = false;
   for (auto& m : profile["modules"])
@@ -44,21 +30,17 @@ TEST_CASE("the demo plays a whole round by itself") {
       }
     }
   REQUIRE(has_book);  // the shipped profile keeps a round book
-  std::ofstream(dir / "demo.json") << profile.dump(1);
+  harness::write_file(dir / "demo.json", profile.dump(1));
 
-  launcher::SpawnOptions o;
-  o.stdout_path = (dir / "launch.out").string();
-  o.stderr_path = (dir / "launch.err").string();
-  o.env = {"DISPLAY=", "SDL_AUDIODRIVER=dummy", std::string("LCM_DEFAULT_URL=") + test::kTestUrl};
   // The first block at 2 s of the scenario, the round 2 s later, 20 s long: over by about 25 s.
-  auto launch = launcher::Process::spawn(
-      {test::bin("bricklayer-launch"), "--root", BRICKLAYER_SOURCE_DIR, "--duration", "28", (dir / "demo.json").string()}, o);
-  auto st = launch.wait_for(120s);
-  REQUIRE(st);
-  INFO(slurp(dir / "launch.out") << slurp(dir / "launch.err"));
-  CHECK(st->clean());
+  const harness::Ran launch = harness::run_program(
+      "bricklayer-launch", {"--root", BRICKLAYER_SOURCE_DIR, "--duration", "28", (dir / "demo.json").string()}, 120s,
+      harness::ProgramOptions{{"DISPLAY=", "SDL_AUDIODRIVER=dummy", std::string("LCM_DEFAULT_URL=") + harness::kLiveUrl}, ""});
+  REQUIRE_FALSE(launch.timed_out);
+  INFO(launch.out << launch.err);
+  CHECK(launch.status.clean());
 
-  const nlohmann::json book = nlohmann::json::parse(slurp(dir / "rounds.json"));
+  const nlohmann::json book = nlohmann::json::parse(harness::read_file(dir / "rounds.json"));
   INFO(book.dump(1));
   REQUIRE(book["rounds"].size() >= 1);
   const nlohmann::json& round = book["rounds"][0];
@@ -69,5 +51,4 @@ TEST_CASE("the demo plays a whole round by itself") {
   CHECK(round["max_score"].get<int>() <= 125);
   CHECK(round["blocks"] == 4);
   CHECK(round["most_blocks"] == 4);
-  fs::remove_all(dir);
 }

@@ -16,10 +16,16 @@
 #include "bricklayer/calibration_t.hpp"
 #include "bricklayer/command_t.hpp"
 #include "bricklayer/image_t.hpp"
+#include "bricklayer/common/channels.h"
+#include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/launcher/process.h"
 #include "bricklayer/prediction_t.hpp"
+#include "bricklayer/runtime/codec.h"
+#include "bricklayer/runtime/lcm_bus.h"
 #include "bricklayer/stack_t.hpp"
-#include "reliability_test_util.h"
+#include "harness/live_bus.h"
+#include "harness/recorder.h"
+#include "harness/scratch.h"
 
 using namespace bricklayer;
 using namespace std::chrono_literals;
@@ -75,21 +81,21 @@ std::vector<Hostile> hostile_stacks() {
   std::vector<Hostile> out;
   // num_blocks says 2^31-1 but three blocks follow: undecodable, must not allocate 2^31 blocks.
   // Offset of num_blocks: utime, frame_number (16) + 3 doubles (24) + status (1).
-  out.push_back({"stack num_blocks 2^31-1 with 3 blocks", ch, test::encode_bytes(good_stack(3, 901))});
+  out.push_back({"stack num_blocks 2^31-1 with 3 blocks", ch, runtime::encode(good_stack(3, 901))});
   out.back().bytes = patch_i32(out.back().bytes, 41, std::numeric_limits<int32_t>::max());
-  out.push_back({"stack num_blocks -5", ch, patch_i32(test::encode_bytes(good_stack(3, 902)), 41, -5)});
+  out.push_back({"stack num_blocks -5", ch, patch_i32(runtime::encode(good_stack(3, 902)), 41, -5)});
   auto nan_x = good_stack(4, 903);
   nan_x.blocks[2].x = kNaN;
-  out.push_back({"stack NaN x", ch, test::encode_bytes(nan_x)});
+  out.push_back({"stack NaN x", ch, runtime::encode(nan_x)});
   auto neg_h = good_stack(3, 904);
   neg_h.block_height = -1.0;
-  out.push_back({"stack negative block height", ch, test::encode_bytes(neg_h)});
+  out.push_back({"stack negative block height", ch, runtime::encode(neg_h)});
   auto inf_edge = good_stack(3, 905);
   inf_edge.table_edge = std::numeric_limits<double>::infinity();
-  out.push_back({"stack infinite table edge", ch, test::encode_bytes(inf_edge)});
+  out.push_back({"stack infinite table edge", ch, runtime::encode(inf_edge)});
   auto rows = good_stack(3, 906);
   rows.blocks[1].row = std::numeric_limits<int32_t>::max();
-  out.push_back({"stack row 2^31-1", ch, test::encode_bytes(rows)});
+  out.push_back({"stack row 2^31-1", ch, runtime::encode(rows)});
   return out;
 }
 
@@ -105,26 +111,26 @@ std::vector<Hostile> hostile_predictions() {
   p.blocks.resize(2);
   // num_blocks is the last field before the blocks: its offset follows from the encoded sizes with two
   // blocks and with none, whatever fields precede it and however large a block entry is.
-  const std::vector<uint8_t> encoded = test::encode_bytes(p);
+  const std::vector<uint8_t> encoded = runtime::encode(p);
   prediction_t none = p;
   none.num_blocks = 0;
   none.blocks.clear();
-  const size_t blocks_bytes = encoded.size() - test::encode_bytes(none).size();
+  const size_t blocks_bytes = encoded.size() - runtime::encode(none).size();
   const size_t num_blocks_offset = encoded.size() - 8 - blocks_bytes - 4;  // after the 8-byte fingerprint
   out.push_back({"prediction num_blocks 2^31-1 with 2 blocks", ch,
                  patch_i32(encoded, num_blocks_offset, std::numeric_limits<int32_t>::max())});
   auto nan = p;
   nan.frame_number = 912;
   nan.overhang = kNaN;
-  out.push_back({"prediction NaN overhang", ch, test::encode_bytes(nan)});
+  out.push_back({"prediction NaN overhang", ch, runtime::encode(nan)});
   auto state = p;
   state.frame_number = 913;
   state.blocks[0].state = 77;
-  out.push_back({"prediction block state 77", ch, test::encode_bytes(state)});
+  out.push_back({"prediction block state 77", ch, runtime::encode(state)});
   auto status = p;
   status.frame_number = 914;
   status.status = -3;
-  out.push_back({"prediction status -3", ch, test::encode_bytes(status)});
+  out.push_back({"prediction status -3", ch, runtime::encode(status)});
   return out;
 }
 
@@ -148,22 +154,22 @@ std::vector<Hostile> hostile_images() {
   huge.width = 100000;
   huge.height = 100000;
   huge.format = image_t::FORMAT_BGR8;
-  out.push_back({"image 100000x100000 with 64 bytes", ch, test::encode_bytes(huge)});
+  out.push_back({"image 100000x100000 with 64 bytes", ch, runtime::encode(huge)});
   auto overflow = small_image(922);
   overflow.width = 65536;
   overflow.height = 65536;  // width*height wraps to 0 in 32 bits
-  out.push_back({"image 65536x65536 (32-bit product wraps)", ch, test::encode_bytes(overflow)});
+  out.push_back({"image 65536x65536 (32-bit product wraps)", ch, runtime::encode(overflow)});
   auto negative = small_image(923);
   negative.width = -8;
-  out.push_back({"image negative width", ch, test::encode_bytes(negative)});
+  out.push_back({"image negative width", ch, runtime::encode(negative)});
   auto format = small_image(924);
   format.format = 99;
-  out.push_back({"image unknown format", ch, test::encode_bytes(format)});
+  out.push_back({"image unknown format", ch, runtime::encode(format)});
   auto png = small_image(925);
   png.format = image_t::FORMAT_PNG;  // 64 bytes of 0x80 are no PNG
-  out.push_back({"image PNG that is not a PNG", ch, test::encode_bytes(png)});
+  out.push_back({"image PNG that is not a PNG", ch, runtime::encode(png)});
   // size offset: utime, frame (16) + width, height, format (12) + source string (4 + 8).
-  out.push_back({"image size -1", ch, patch_i32(test::encode_bytes(small_image(926)), 40, -1)});
+  out.push_back({"image size -1", ch, patch_i32(runtime::encode(small_image(926)), 40, -1)});
   return out;
 }
 
@@ -176,11 +182,11 @@ std::vector<Hostile> hostile_calibrations() {
   c.projector_width = 1024;
   c.projector_height = 768;
   c.camera_matrix[0] = kNaN;
-  out.push_back({"calibration NaN focal length", ch, test::encode_bytes(c)});
+  out.push_back({"calibration NaN focal length", ch, runtime::encode(c)});
   calibration_t n{};
   n.camera_width = -640;
   n.camera_height = 1 << 30;
-  out.push_back({"calibration negative / huge image size", ch, test::encode_bytes(n)});
+  out.push_back({"calibration negative / huge image size", ch, runtime::encode(n)});
   return out;
 }
 
@@ -193,11 +199,11 @@ std::vector<Hostile> hostile_commands() {
   c.index = -7;
   c.red = -300;
   c.sequence = 931;
-  out.push_back({"command unknown pattern, negative index and colour", ch, test::encode_bytes(c)});
+  out.push_back({"command unknown pattern, negative index and colour", ch, runtime::encode(c)});
   command_t u{};
   u.command = 999;
   u.sequence = 932;
-  out.push_back({"command 999", ch, test::encode_bytes(u)});
+  out.push_back({"command 999", ch, runtime::encode(u)});
   return out;
 }
 
@@ -211,32 +217,38 @@ struct Case {
 void run_case(const Case& c) {
   INFO("module " << c.module);
   launcher::SpawnOptions opts;
-  opts.env = {std::string("LCM_DEFAULT_URL=") + test::kTestUrl, "SDL_VIDEODRIVER=offscreen", "SDL_AUDIODRIVER=dummy"};
+  opts.env = {std::string("LCM_DEFAULT_URL=") + harness::kLiveUrl, "SDL_VIDEODRIVER=offscreen", "SDL_AUDIODRIVER=dummy"};
   opts.stdout_path = fs::temp_directory_path() / ("bricklayer-hostile-" + c.module + "-" + std::to_string(::getpid()) + ".log");
   opts.merge_stderr = true;
   opts.cwd = c.cwd;
   auto proc = launcher::Process::spawn(c.argv, opts);
-  test::Listener bus;
-  REQUIRE(bus.ok());
-  bus.listen(channel(kHeartbeatChannel));
-  heartbeat_t hb{};
-  REQUIRE(bus.pump_until([&] { return bus.last_heartbeat(c.module, hb) && hb.pid == proc.pid(); }, 15s));
-  bus.pump(300ms);  // start-up settled (a calibration published at start, first frames)
-  REQUIRE(bus.last_heartbeat(c.module, hb));
+  runtime::LcmBus bus(harness::kLiveUrl);
+  REQUIRE(bus.open());
+  harness::Recorder rec = harness::Recorder::live(bus, {channel(kHeartbeatChannel)});
+  REQUIRE(rec.wait_for_heartbeat(c.module, [&](const heartbeat_t& h) { return h.pid == proc.pid(); }, 15s));
+  rec.pump_for(300ms);  // start-up settled (a calibration published at start, first frames)
+  const auto hb = rec.last_heartbeat(c.module);
+  REQUIRE(hb);
   // One message at a time, each followed by the next heartbeat (sent at least 100 ms after it, so the
   // message has been handled): its error counter must have grown by at least one.
-  int64_t errors = hb.errors;
+  int64_t errors = hb->errors;
   for (const auto& group : c.inputs) {
     for (const auto& h : group) {
       INFO(h.what);
-      bus.pump(20ms);
-      bus.messages.clear();
-      const auto sent_at = std::chrono::steady_clock::now();
-      bus.lcm().publish(h.channel, h.bytes.data(), static_cast<unsigned>(h.bytes.size()));
+      rec.pump_for(20ms);
+      rec.clear();
+      const int64_t sent_at = bus.now_utime();
+      harness::publish_bytes(bus, h.channel, h.bytes);
       heartbeat_t after{};
-      REQUIRE(bus.pump_until([&] {
-        for (const auto& m : bus.on(channel(kHeartbeatChannel)))
-          if (m.when > sent_at + 100ms && test::decode(m.bytes, after) && after.module == c.module) return true;
+      REQUIRE(rec.wait_until([&] {
+        for (const auto& m : rec.messages()) {
+          if (m.channel != channel(kHeartbeatChannel) || m.utime <= sent_at + 100'000) continue;
+          const auto beat = runtime::decode<heartbeat_t>(m.bytes);
+          if (beat && beat->module == c.module) {
+            after = *beat;
+            return true;
+          }
+        }
         return false;
       }, 5s));
       REQUIRE(proc.running());
@@ -252,11 +264,11 @@ void run_case(const Case& c) {
 }  // namespace
 
 TEST_CASE("prediction counts every hostile stack as an error and keeps running") {
-  run_case({"prediction", {test::bin("bricklayer-prediction"), "--log-level", "error"}, {hostile_stacks()}});
+  run_case({"prediction", {harness::program_path("bricklayer-prediction"), "--log-level", "error"}, {hostile_stacks()}});
 }
 
 TEST_CASE("vision counts every hostile frame and calibration as an error and keeps running") {
-  run_case({"vision", {test::bin("bricklayer-vision"), "--log-level", "error"}, {hostile_images(), hostile_calibrations()}});
+  run_case({"vision", {harness::program_path("bricklayer-vision"), "--log-level", "error"}, {hostile_images(), hostile_calibrations()}});
 }
 
 TEST_CASE("projection counts every hostile stack, prediction, calibration and command it uses as an error") {
@@ -268,7 +280,7 @@ TEST_CASE("projection counts every hostile stack, prediction, calibration and co
   auto commands = hostile_commands();
   commands[1] = unused(commands[1]);
   run_case({"projection",
-            {test::bin("bricklayer-projection"), "--headless", "--log-level", "error"},
+            {harness::program_path("bricklayer-projection"), "--headless", "--log-level", "error"},
             {hostile_stacks(), predictions, hostile_calibrations(), commands}});
 }
 
@@ -282,10 +294,10 @@ TEST_CASE("planner counts every hostile stack it plans with as an error and surv
   command_t hint{};
   hint.command = command_t::REQUEST_HINT;
   hint.sequence = 940;
-  stacks.push_back(unused({"REQUEST_HINT after the row 2^31-1 stack", channel(kCommandChannel), test::encode_bytes(hint)}));
+  stacks.push_back(unused({"REQUEST_HINT after the row 2^31-1 stack", channel(kCommandChannel), runtime::encode(hint)}));
   auto predictions = hostile_predictions();
   for (auto& h : predictions) h = unused(h);
-  run_case({"planner", {test::bin("bricklayer-planner"), "--log-level", "error"}, {stacks, predictions}});
+  run_case({"planner", {harness::program_path("bricklayer-planner"), "--log-level", "error"}, {stacks, predictions}});
 }
 
 TEST_CASE("calibrate --serve survives hostile frames, commands and stacks and counts those it uses") {
@@ -294,7 +306,7 @@ TEST_CASE("calibrate --serve survives hostile frames, commands and stacks and co
   {
     launcher::SpawnOptions o;
     o.cwd = dir;
-    auto w = launcher::Process::spawn({test::bin("bricklayer-calibrate"), "--write-default", "--output=calibration.json"}, o);
+    auto w = launcher::Process::spawn({harness::program_path("bricklayer-calibrate"), "--write-default", "--output=calibration.json"}, o);
     auto st = w.wait_for(10s);
     REQUIRE(st);
     REQUIRE(st->clean());
@@ -306,7 +318,7 @@ TEST_CASE("calibrate --serve survives hostile frames, commands and stacks and co
   for (auto& group : inputs)
     for (auto& h : group)
       if (h.what.find("num_blocks") == std::string::npos && h.what.find("size -1") == std::string::npos) h = unused(h);
-  Case c{"calibrate", {test::bin("bricklayer-calibrate"), "--serve", "--log-level", "error"}, inputs, dir};
+  Case c{"calibrate", {harness::program_path("bricklayer-calibrate"), "--serve", "--log-level", "error"}, inputs, dir};
   run_case(c);
   fs::remove_all(dir);
 }

@@ -9,9 +9,13 @@
 #include <filesystem>
 #include <set>
 
+#include "bricklayer/common/channels.h"
 #include "bricklayer/common/lcm_url.h"
+#include "bricklayer/heartbeat_t.hpp"
 #include "bricklayer/launcher/process.h"
-#include "reliability_test_util.h"
+#include "bricklayer/runtime/lcm_bus.h"
+#include "harness/recorder.h"
+#include "harness/scratch.h"
 
 using namespace bricklayer;
 using namespace std::chrono_literals;
@@ -33,7 +37,7 @@ struct Outcome {
 };
 
 Outcome run(std::vector<std::string> argv, const std::vector<std::string>& env = {}) {
-  argv[0] = test::bin(argv[0]);
+  argv[0] = harness::program_path(argv[0]);
   launcher::SpawnOptions o;
   o.env = env;
   o.env.push_back("SDL_VIDEODRIVER=offscreen");
@@ -43,7 +47,7 @@ Outcome run(std::vector<std::string> argv, const std::vector<std::string>& env =
   auto p = launcher::Process::spawn(argv, o);
   auto st = p.wait_for(10s);
   if (!st) st = p.stop(2s);
-  return {*st, test::slurp(o.stdout_path)};
+  return {*st, harness::read_file(o.stdout_path)};
 }
 
 }  // namespace
@@ -103,7 +107,7 @@ std::string work_dir() { return fs::temp_directory_path() / ("bricklayer-url-" +
 std::vector<launcher::Process> start_all(const std::string& anchor, const std::vector<std::string>& env) {
   std::vector<launcher::Process> out;
   for (const auto& base : kBinaries) {
-    std::vector<std::string> argv = {"/usr/bin/nsenter", "-t", anchor, "-n", test::bin(base[0])};
+    std::vector<std::string> argv = {"/usr/bin/nsenter", "-t", anchor, "-n", harness::program_path(base[0])};
     argv.insert(argv.end(), base.begin() + 1, base.end());
     argv.insert(argv.end(), {"--log-level", "error"});
     launcher::SpawnOptions o;
@@ -127,7 +131,7 @@ TEST_CASE("with the default URL no process is heard on another host, with ttl=1 
   {
     launcher::SpawnOptions o;
     o.cwd = work_dir();
-    auto w = launcher::Process::spawn({test::bin("bricklayer-calibrate"), "--write-default", "--output=calibration.json"}, o);
+    auto w = launcher::Process::spawn({harness::program_path("bricklayer-calibrate"), "--write-default", "--output=calibration.json"}, o);
     auto st = w.wait_for(10s);
     REQUIRE(st);
     REQUIRE(st->clean());
@@ -144,22 +148,20 @@ TEST_CASE("with the default URL no process is heard on another host, with ttl=1 
   sh("/usr/bin/nsenter -t " + pid + " -n sh -c 'ip link set lo up && ip addr add 10.203.0.2/24 dev bl-url-b && "
      "ip link set bl-url-b multicast on && ip link set bl-url-b up && ip route add 224.0.0.0/4 dev bl-url-b'");
 
-  test::Listener other_host("udpm://239.255.76.67:7667?ttl=1");
-  REQUIRE(other_host.ok());
-  other_host.listen(channel(kHeartbeatChannel));
+  runtime::LcmBus other_bus("udpm://239.255.76.67:7667?ttl=1");
+  REQUIRE(other_bus.open());
+  harness::Recorder other_host = harness::Recorder::live(other_bus, {channel(kHeartbeatChannel)});
   auto modules_heard = [&] {
     std::set<std::string> heard;
-    heartbeat_t hb{};
-    for (const auto& m : other_host.on(channel(kHeartbeatChannel)))
-      if (test::decode(m.bytes, hb)) heard.insert(hb.module);
+    for (const heartbeat_t& hb : other_host.all<heartbeat_t>(channel(kHeartbeatChannel))) heard.insert(hb.module);
     return heard;
   };
 
   {
     auto procs = start_all(pid, {});  // no --lcm-url, no LCM_DEFAULT_URL: the built-in default
-    other_host.pump(3500ms);          // every module heartbeats once a second
+    other_host.pump_for(3500ms);      // every module heartbeats once a second
     for (size_t i = 0; i < procs.size(); ++i) {
-      INFO(kBinaries[i][0] << ": " << test::slurp(fs::temp_directory_path() / ("bricklayer-url-" + kBinaries[i][0] + "-" +
+      INFO(kBinaries[i][0] << ": " << harness::read_file(fs::temp_directory_path() / ("bricklayer-url-" + kBinaries[i][0] + "-" +
                                                                               std::to_string(::getpid()) + ".log")));
       CHECK(procs[i].running());
     }
@@ -169,7 +171,7 @@ TEST_CASE("with the default URL no process is heard on another host, with ttl=1 
   {
     // Positive control: the same processes on the LAN URL are heard (the veth and routes work).
     auto procs = start_all(pid, {"LCM_DEFAULT_URL=udpm://239.255.76.67:7667?ttl=1"});
-    const bool all = other_host.pump_until([&] { return modules_heard().size() == kBinaries.size(); }, 10s);
+    const bool all = other_host.wait_until([&] { return modules_heard().size() == kBinaries.size(); }, 10s);
     std::string heard;
     for (const auto& m : modules_heard()) heard += m + " ";
     INFO("heard: " << heard);
