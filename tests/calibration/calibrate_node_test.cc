@@ -532,6 +532,47 @@ TEST_CASE("the serving calibrate node: a calibration on CALIBRATE that is reject
   CHECK(runtime::encode(rec.all<calibration_t>(kCalibrations).back()) == runtime::encode(old_calibration));
 }
 
+TEST_CASE("the serving calibrate node corrects the board scale on CALIBRATE scale-from-blocks, and serves the result") {
+  harness::ScratchDir dir("calibrate-node-serve-scale");
+  CalibrateConfig config = calibrate_config(dir / "calibration.json");
+  std::filesystem::copy_file(calibrated_file(), config.output);
+  const calibration_t before = board::load_calibration(config.output);
+  config.serve = true;
+  config.republish = 1;
+  harness::Rig rig(kStepUs);
+  rig.add<simcam::SimcamNode>(camera_config(blocks_scenario(dir), kSetupSeed));
+  rig.add<projection::ProjectionNode>(projector_config());
+  auto& rec = rig.record({kCommands, kCalibrations});
+  auto& node = rig.add<CalibrateNode>(config);
+  rig.run_for(200ms);
+  command_t scale = calibrate_command();
+  scale.argument = CalibrateNode::kScaleFromBlocks;
+  rig.publish(kCommands, scale);  // blocks on the board: this step needs them, it starts at once
+  rig.run_for(100ms);
+  CHECK(node.status() == "measuring blocks on the bottom row");
+  rig.publish(kCommands, scale);  // while it measures: counted, not run twice
+  REQUIRE(rig.run_until([&] { return node.calibrations_done() + node.calibrations_failed() > 0; }, 30s));
+  INFO("status " << node.status());
+  CHECK(node.calibrations_done() == 1);
+  CHECK(node.calibrate_commands_ignored() == 1);
+  CHECK(node.status() == "ok");
+  CHECK(node.counters().errors == 0);
+  CHECK(patterns_shown(rec.all<command_t>(kCommands)) == 0);  // no patterns: the blocks are the ruler
+  const calibration_t after = board::load_calibration(config.output);
+  REQUIRE(node.calibration());
+  CHECK(runtime::encode(*node.calibration()) == runtime::encode(after));
+  CHECK(runtime::encode(rec.all<calibration_t>(kCalibrations).back()) == runtime::encode(after));
+  double worst_before = 0, worst_after = 0;
+  for (double x : {-3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0}) {
+    worst_before = std::max(worst_before, std::abs(calibrated_x(before, kSetupSeed, x) - x));
+    worst_after = std::max(worst_after, std::abs(calibrated_x(after, kSetupSeed, x) - x));
+  }
+  INFO("bottom row board x off by up to " << worst_before << " as calibrated, " << worst_after << " after");
+  CHECK(worst_after < 0.01);  // as the one-off --scale-from-blocks
+  CHECK(worst_after < worst_before);
+  CHECK_FALSE(node.finished());
+}
+
 TEST_CASE("without a projector the calibrate node fails after twice --timeout of bus time with a counted error") {
   harness::ScratchDir dir("calibrate-node-noprojector");
   CalibrateConfig config = calibrate_config(dir / "never.json");

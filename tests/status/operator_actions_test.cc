@@ -27,6 +27,7 @@ TEST_CASE("each action becomes the command its module obeys") {
       {R"({"action":"reset_round"})", command_t::RESET_ROUND, ""},
       {R"({"action":"check_calibration"})", command_t::SELF_CHECK, ""},
       {R"({"action":"calibrate"})", command_t::CALIBRATE, ""},
+      {R"({"action":"calibrate","step":"scale-from-blocks"})", command_t::CALIBRATE, "scale-from-blocks"},
       {R"({"action":"mark_moment","note":"a child cried at the board"})", command_t::MARK_MOMENT, "a child cried at the board"},
       {R"({"action":"mark_moment"})", command_t::MARK_MOMENT, "marked on the status page"},
       {R"({"action":"restart","host":"camera-host","module":"vision"})", command_t::RESTART_MODULE, "camera-host/vision"},
@@ -96,7 +97,8 @@ TEST_CASE("malformed requests with the right token are bad requests, never a cra
   for (const std::string body : {"", "not json", "[]", R"({"action":7})", R"({"action":"format_disk"})",
                                  R"({"action":"restart","module":"vision"})",
                                  R"({"action":"restart","host":"a/b","module":"vision"})",
-                                 R"({"action":"restart","host":"camera-host","module":""})"}) {
+                                 R"({"action":"restart","host":"camera-host","module":""})",
+                                 R"({"action":"calibrate","step":"everything"})"}) {
     INFO(body);
     const ActionAnswer a = decide_action(body, kToken, kToken);
     CHECK(a.http_status == 400);

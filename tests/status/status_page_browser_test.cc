@@ -225,24 +225,33 @@ TEST_CASE("the status page in Chromium: no console errors, the modules' states, 
     INFO(pressed.out);
     CHECK(r.at("set_condition") == "Done: the display condition is red from now on");
     CHECK(r.at("condition_after") == "red");
-    REQUIRE(r.at("dialogs").size() == 2);
+    REQUIRE(r.at("dialogs").size() == 3);
     CHECK(r.at("dialogs")[0].get<std::string>().rfind("Calibrate now? The board must be empty", 0) == 0);
     CHECK(r.at("posts_after_dismiss") == 1);  // the condition's only: the dismissed confirmation sent nothing
-    CHECK(r.at("action_posts") == 2);
+    CHECK(r.at("dialogs")[2].get<std::string>().rfind("Correct the board scale now? Three or more blocks", 0) == 0);
+    CHECK(r.at("action_posts") == 3);
     CHECK(r.at("calibrate").get<std::string>().rfind("Done: the calibration starts once the board", 0) == 0);
     CHECK(r.at("calibration_line").get<std::string>().rfind(
               "Calibration: calibration waits for an empty board: clear the board", 0) == 0);
+    CHECK(r.at("scale") == "Done: the board scale is measured from the blocks on the bottom row now (see Calibration)");
     CHECK(r.at("console").empty());
     CHECK(r.at("errors").empty());
-    // On the bus: the condition (index 2, red) and exactly one CALIBRATE, both from the status page.
+    // On the bus: the condition (index 2, red), exactly one CALIBRATE for a full calibration and one for
+    // the scale step, all from the status page.
     const auto end = std::chrono::steady_clock::now() + 10s;
     auto count = [&](int32_t code) {
       int n = 0;
       for (const command_t& c : listener.commands()) n += c.command == code;
       return n;
     };
-    while (count(command_t::CALIBRATE) == 0 && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(50ms);
-    CHECK(count(command_t::CALIBRATE) == 1);
+    while (count(command_t::CALIBRATE) < 2 && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(50ms);
+    int full = 0, scale = 0;
+    for (const command_t& c : listener.commands()) {
+      full += c.command == command_t::CALIBRATE && c.argument.empty();
+      scale += c.command == command_t::CALIBRATE && c.argument == "scale-from-blocks";
+    }
+    CHECK(full == 1);
+    CHECK(scale == 1);
     int red = 0;
     for (const command_t& c : listener.commands()) red += c.command == command_t::SET_CONDITION && c.index == 2;
     CHECK(red == 1);

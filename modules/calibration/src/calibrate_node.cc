@@ -244,12 +244,7 @@ CalibrateNode::CalibrateNode(const Config& config, runtime::Bus& bus)
     }
     log::info("loaded ", config_.output, " (reprojection error mean ", calibration_->reprojection_error_mean_px, " px)");
   }
-  if (mode_ == Mode::kScale) {
-    scale_ = std::make_unique<detection::BlockScaleMeter>(*calibration_);
-    scale_started_utime_ = now();
-    set_status("measuring blocks on the bottom row");
-    log::info("measuring the board scale from blocks standing apart on the bottom row (", config_.scale_frames, " frames)");
-  }
+  if (mode_ == Mode::kScale) start_scale();
   // Every echo and every frame counts (the frames after an echo are counted to skip those in flight):
   // queues hold a burst; the projector image (scale mode) is decoded only for the newest.
   subscribe<projector_state_t>(channel(kProjectorChannel), runtime::QueuePolicy::keep(16),
@@ -303,7 +298,7 @@ void CalibrateNode::on_stack(const stack_t& s) {
 void CalibrateNode::on_command(const command_t& c) {
   if (mode_ != Mode::kServe) return;
   if (c.command == command_t::CALIBRATE) {
-    on_calibrate_command();
+    on_calibrate_command(c);
     return;
   }
   if (c.command != command_t::SELF_CHECK) return;
@@ -311,8 +306,8 @@ void CalibrateNode::on_command(const command_t& c) {
     log::warn("SELF_CHECK ignored: no calibration to check yet (", config_.output, "); run bricklayer-calibrate");
     return;
   }
-  if (capture_) {
-    log::warn("SELF_CHECK ignored: a ", capture_calibrates_ ? "calibration" : "self-check", " is already running");
+  if (capture_ || scale_) {
+    log::warn("SELF_CHECK ignored: a ", capture_ && !capture_calibrates_ ? "self-check" : "calibration", " is already running");
     return;
   }
   if (!board_empty_) {
@@ -325,10 +320,24 @@ void CalibrateNode::on_command(const command_t& c) {
 
 // A CALIBRATE command (--serve): it waits for the board to have been empty --empty-for seconds (tick);
 // one already waiting or running is not asked for twice.
-void CalibrateNode::on_calibrate_command() {
-  if (capture_ && capture_calibrates_) {
+void CalibrateNode::on_calibrate_command(const command_t& c) {
+  if ((capture_ && capture_calibrates_) || scale_) {
     ++calibrate_ignored_;
     log::warn("CALIBRATE ignored: a calibration is already running (", status(), ")");
+    return;
+  }
+  if (c.argument == kScaleFromBlocks) {
+    // The scale step needs blocks on the board, not an empty one: it starts at once.
+    if (calibrate_asked_utime_ || capture_) {
+      ++calibrate_ignored_;
+      log::warn("CALIBRATE scale-from-blocks ignored: a ", capture_ ? "self-check runs" : "calibration waits", "; ask again after it");
+      return;
+    }
+    if (!calibration_) {
+      calibration_failed("scale not measured: no calibration to correct yet; calibrate first");
+      return;
+    }
+    start_scale();
     return;
   }
   if (calibrate_asked_utime_) {
@@ -392,6 +401,30 @@ void CalibrateNode::start_calibration() {
   capture_ = make_capture(calibration_steps(options_), mode_ == Mode::kServe ? "calibrating: " : "");
 }
 
+void CalibrateNode::start_scale() {
+  scale_ = std::make_unique<detection::BlockScaleMeter>(*calibration_);
+  scale_started_utime_ = now();
+  scale_seen_ = scale_frames_ = 0;
+  scale_by_frame_.clear();
+  set_status("measuring blocks on the bottom row");
+  log::info("measuring the board scale from blocks standing apart on the bottom row (", config_.scale_frames, " frames)");
+}
+
+// --scale-from-blocks ends the process with this code; --serve (CALIBRATE "scale-from-blocks") counts the
+// run, serves the corrected calibration or keeps the old one, and serves on.
+void CalibrateNode::end_scale(int code) {
+  if (mode_ != Mode::kServe) {
+    finish(code);
+    return;
+  }
+  if (code != 0) {
+    calibration_failed(status());
+    return;
+  }
+  ++calibrations_done_;
+  file_time_ = file_time();  // our own write, not a change to re-read
+}
+
 void CalibrateNode::start_self_check() {
   last_check_utime_ = now();
   log::info("self-check: projecting ", patterns::kMarkerSetSelfCheck == 2 ? "five" : "the", " check markers");
@@ -431,15 +464,15 @@ void CalibrateNode::tick() {
                               runtime::config_detail::to_text(2 * config_.timeout) +
                               " s: is the camera (bricklayer-camera or bricklayer-simcam) running?";
       error("missing camera frames", why);
-      set_status("no camera frames");
+      set_status("scale not measured: no camera frames");
       scale_.reset();
-      finish(kExitRejected);
+      end_scale(kExitRejected);
       return;
     }
     wake_at(scale_started_utime_ + 2 * seconds_us(config_.timeout) + 1);
   }
   if (mode_ == Mode::kServe) serve_calibrate_request(t);
-  if (mode_ == Mode::kServe && calibration_ && !capture_ && !calibrate_asked_utime_ && config_.self_check_every > 0 &&
+  if (mode_ == Mode::kServe && calibration_ && !capture_ && !scale_ && !calibrate_asked_utime_ && config_.self_check_every > 0 &&
       board_empty_) {
     const int64_t due = std::max(empty_since_utime_ + seconds_us(config_.empty_for),
                                  last_check_utime_ + seconds_us(config_.self_check_every));
@@ -621,7 +654,7 @@ void CalibrateNode::finish_scale() {
                             ": are the blocks standing apart, whole in view, the camera steady?";
     log::error("board scale not measured: ", why);
     set_status("scale not measured: " + why);
-    finish(kExitRejected);
+    end_scale(kExitRejected);
     return;
   }
   if (kept < config_.scale_frames)
@@ -633,7 +666,7 @@ void CalibrateNode::finish_scale() {
   if (!fit) {
     log::error("board scale not measured: ", why);
     set_status("scale not measured: " + why);
-    finish(kExitRejected);
+    end_scale(kExitRejected);
     return;
   }
   std::string lean_why;
@@ -664,7 +697,7 @@ void CalibrateNode::finish_scale() {
   if (change < config_.scale_min_change) {
     log::info(text.str(), ": below --scale-min-change ", config_.scale_min_change, ", ", config_.output, " left as it is");
     set_status("ok: scale already right");
-    finish(0);
+    end_scale(0);
     return;
   }
   calibration_t corrected = apply_frame_correction(*calibration_, fit->scale, fit->keystone, shear, vertical_keystone);
@@ -673,14 +706,15 @@ void CalibrateNode::finish_scale() {
     board::save_calibration(config_.output, corrected);
   } catch (const std::exception& e) {
     error("unwritable calibration files", e.what());
-    finish(kExitRejected);
+    set_status(std::string("scale not saved: ") + e.what());
+    end_scale(kExitRejected);
     return;
   }
   log::info(text.str(), ": board scale corrected, saved ", config_.output, "; publishing on ", calibration_channel_);
   calibration_ = corrected;
   publish_calibration();
   set_status("ok");
-  finish(0);
+  end_scale(0);
 }
 
 std::filesystem::file_time_type CalibrateNode::file_time() const {

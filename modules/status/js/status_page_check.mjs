@@ -20,7 +20,7 @@
 //   request may follow: "posts_after_dismiss" counts the POSTs to /action until then), the second accepted
 //   (the answer goes to "calibrate"); "dialogs" are the confirmations' words; then waits until the
 //   calibration line says WORDS (--calibration-shows WORDS; without it: until it changes) and reports it
-//   ("calibration_line").
+//   ("calibration_line"); then presses "Correct the scale with blocks", accepted (its answer: "scale").
 // Prints one JSON object on stdout; exits 2 when the browser cannot be started or the page not opened.
 import { createRequire } from "node:module";
 import { dirname, join } from "node:path";
@@ -127,16 +127,18 @@ try {
     const line = await page.textContent("#calibration");
     await page.fill("#token", option("--token") ?? "");
     await page.dispatchEvent("#token", "change");
-    await page.click('button[data-action="calibrate"]');  // confirm() returns once the dialog is dismissed
+    await page.click('button[data-action="calibrate"]:not([data-step])');  // confirm() returns once the dialog is dismissed
     result.posts_after_dismiss = actionPosts;
     acceptDialogs = true;
-    result.calibrate = await press(option("--token") ?? "", 'button[data-action="calibrate"]');
+    result.calibrate = await press(option("--token") ?? "", 'button[data-action="calibrate"]:not([data-step])');
     // The calibrate node's answer comes in its next heartbeat: wait for the words asked for, else any change.
     await page.waitForFunction(([b, want]) => {
       const now = document.getElementById("calibration").textContent;
       return want ? now.includes(want) : now !== b;
     }, [line, option("--calibration-shows")], { timeout: timeout_ms });
     result.calibration_line = await page.textContent("#calibration");
+    // The scale step's button (accepted): its own confirmation, its own request.
+    result.scale = await press(option("--token") ?? "", 'button[data-action="calibrate"][data-step="scale-from-blocks"]');
   }
   result.action_posts = actionPosts;
   if (args.includes("--images")) {

@@ -118,9 +118,18 @@ ActionAnswer decide_action(const std::string& body, const std::string& token_giv
     a.command = command(command_t::SELF_CHECK);
     a.words = "the calibration is checked for drift as soon as the board is empty";
   } else if (action == "calibrate") {
-    a.command = command(command_t::CALIBRATE);
-    a.words = "the calibration starts once the board has been empty for a few seconds; the projector shows its "
-              "patterns meanwhile (see Calibration)";
+    // "step": "scale-from-blocks" is calibrate's board-scale step (blocks on the bottom row are the ruler);
+    // no step is the full calibration. The argument is calibrate's CalibrateNode::kScaleFromBlocks.
+    const std::string step = text("step");
+    if (!step.empty() && step != "scale-from-blocks") {
+      a.http_status = 400;
+      a.words = "a calibration's step is scale-from-blocks or none, not '" + step.substr(0, 40) + "'";
+      return a;
+    }
+    a.command = command(command_t::CALIBRATE, step);
+    a.words = step.empty() ? "the calibration starts once the board has been empty for a few seconds; the projector "
+                             "shows its patterns meanwhile (see Calibration)"
+                           : "the board scale is measured from the blocks on the bottom row now (see Calibration)";
   } else if (action == "set_condition") {
     // The display condition of the next round (what the blocks' colours mean), as projection reads
     // command_t.index: study_session_t::CONDITION_BLUE, _RED, _PROPOSED.

@@ -59,6 +59,7 @@ constexpr const char* kPage = R"HTML(<!DOCTYPE html>
     <button data-action="check_calibration">Check the calibration</button>
     <button data-action="calibrate" data-confirm="Calibrate now? The board must be empty: once it has been empty for 5 s the projector shows calibration patterns instead of the game for about 5 s.">Calibrate now</button>
   </div>
+  <div><button data-action="calibrate" data-step="scale-from-blocks" data-confirm="Correct the board scale now? Three or more blocks must stand apart on the bottom row, spread along it (the game may go on); the camera measures them for a few seconds.">Correct the scale with blocks</button></div>
   <div id="calibration" class="muted">Calibration: nothing heard from bricklayer-calibrate --serve yet.</div>
   <div><label>Display condition for the next round
     <select id="condition-choice"><option value="proposed">proposed (only the blocks that start the fall red)</option>
@@ -198,6 +199,8 @@ for (const b of document.querySelectorAll("#actions-card button")) {
   // A calibration takes the projector from the game: the operator says the board is empty first.
   b.onclick = () => (b.dataset.confirm && !confirm(b.dataset.confirm)) || act(b.dataset.action === "mark_moment"
     ? { action: "mark_moment", note: document.getElementById("note").value }
+    : b.dataset.step
+    ? { action: b.dataset.action, step: b.dataset.step }
     : b.dataset.action === "set_condition"
     ? { action: "set_condition", condition: document.getElementById("condition-choice").value }
     : { action: b.dataset.action });

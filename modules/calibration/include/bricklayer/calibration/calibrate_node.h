@@ -33,7 +33,9 @@
 //                 steps and computation, once the board has been empty --empty-for seconds (waiting at most
 //                 --calibrate-wait seconds for that); accepted, it saves --output and serves the new one;
 //                 rejected, it keeps serving the old one and says why in its status. A CALIBRATE while one
-//                 waits or runs is counted (calibrate_commands_ignored) and said, not queued again.
+//                 waits or runs is counted (calibrate_commands_ignored) and said, not queued again. CALIBRATE
+//                 with argument "scale-from-blocks" runs the --scale-from-blocks step on the served
+//                 calibration instead, at once (it needs the blocks on the board), and serves the result.
 // For every pattern: send SHOW_PATTERN, wait for projector_state_t echoing its sequence, then use the
 // camera frame received --skip-frames frames after the echo (frames already in flight show the
 // previous pattern). A step without echo or frame within --timeout seconds (bus clock) is sent once
@@ -167,6 +169,8 @@ class CalibrateNode final : public runtime::Node {
   static constexpr int kExitDrift = 3;
 
   enum class Mode { kCalibrate, kSelfCheck, kServe, kScale };
+  // CALIBRATE's argument for the scale step (--scale-from-blocks) instead of a full calibration.
+  static constexpr const char* kScaleFromBlocks = "scale-from-blocks";
 
   // Rules across fields (the modes exclude each other).
   static void check(const Config& config);
@@ -211,7 +215,9 @@ class CalibrateNode final : public runtime::Node {
   // The calibration's patterns, as the default mode shows them (calibration_steps).
   void start_calibration();
   std::unique_ptr<PatternCapture> make_capture(std::vector<CalibrationStep> steps, std::string status_prefix);
-  void on_calibrate_command();
+  void on_calibrate_command(const command_t& c);
+  void start_scale();
+  void end_scale(int code);
   // --serve: a waiting CALIBRATE starts, or is dropped after --calibrate-wait.
   void serve_calibrate_request(int64_t t);
   // --serve: a calibration that did not happen or was rejected: counted, said, the old one kept.

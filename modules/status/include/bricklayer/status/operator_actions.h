@@ -38,7 +38,8 @@ struct ActionAnswer {
 
 // Decides one request: its body (JSON {"action": ..., "host": ..., "module": ..., "note": ...}) and the
 // token it carried. Actions: "start_round", "reset_round", "mark_moment" (note optional),
-// "check_calibration" (SELF_CHECK), "calibrate" (CALIBRATE), "restart" (host and module required),
+// "check_calibration" (SELF_CHECK), "calibrate" (CALIBRATE; "step": "scale-from-blocks" for the board
+// scale step, argument "scale-from-blocks"), "restart" (host and module required),
 // "set_condition" ("condition": "blue",
 // "red" or "proposed": command_t SET_CONDITION with index 1, 2, 3). Never throws.
 ActionAnswer decide_action(const std::string& body, const std::string& token_given, const std::string& token_expected);
