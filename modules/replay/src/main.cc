@@ -15,6 +15,7 @@
 #include <memory>
 #include <sstream>
 
+#include "bricklayer/common/channels.h"
 #include "bricklayer/common/flags.h"
 #include "bricklayer/common/log.h"
 #include "bricklayer/inspect/progress.h"
@@ -25,6 +26,8 @@
 #include "bricklayer/replay/replayer.h"
 #include "bricklayer/replay/time_arg.h"
 #include "bricklayer/replay/video_render.h"
+#include "bricklayer/node_config_t.hpp"
+#include "bricklayer/runtime/codec.h"
 #include "bricklayer/runtime/log_file.h"
 
 namespace {
@@ -88,7 +91,9 @@ int Main(int argc, char** argv) {
               "LOG: log files (parts) in order, or a recording's NAME.index. The last line of --check is\n"
               "\"N compared, M mismatches (...)\".");
   flags.add_positional_list("LOG", "log files in order, or one NAME.index");
-  flags.add("module", "prediction", "the modules to replay, chained in this order: prediction, or vision,prediction");
+  flags.add("module", "prediction",
+            "the modules to replay, chained in this order: prediction, or vision,prediction (this build: " +
+                replayable_names() + ")");
   flags.add_bool("check", "compare every output with the recorded one; exit 1 on any mismatch, 3 on damage");
   flags.add("set", "", "configuration overrides, comma-separated: annotator=paper or prediction.annotator=paper");
   flags.add("from", "", "start: seconds into the log (90), a time of day (14:32:05) or a date and time");
@@ -124,6 +129,10 @@ int Main(int argc, char** argv) {
   }
   if (options.to_utime < options.from_utime) throw FlagError("--to is before --from");
   std::vector<std::string> ignored = run_to_run_fields();
+  // The replayed modules' own run-to-run fields (module_registry.cc says why for each).
+  for (const auto& name : options.modules)
+    for (const auto& i : module_named(name).ignored)
+      if (std::find(ignored.begin(), ignored.end(), i) == ignored.end()) ignored.push_back(i);
   for (const auto& i : split(flags.get("ignore"), ',')) ignored.push_back(i);
   const MessageDiff diff(ignored);
   if (flags.get_bool("update") && (sources.size() != 1 || fs::path(sources[0]).extension() == ".index"))
@@ -253,12 +262,24 @@ int Main(int argc, char** argv) {
     if (updated && !updated->write(utime, ch, bytes.data(), bytes.size())) throw std::runtime_error("cannot write " + update_tmp);
   });
   compared = replayer.compared_channels();
+  const std::string config_channel = channel(kConfigChannel);
   replayer.set_observer([&](const runtime::LogEvent& e) {
     checker.observe(e);
     // The regression log keeps everything but the replayed modules' recorded outputs.
-    if (updated && std::find(compared.begin(), compared.end(), e.channel) == compared.end() &&
-        !updated->write(e.utime, e.channel, e.data.data(), e.data.size()))
-      throw std::runtime_error("cannot write " + update_tmp);
+    if (!updated || replayer.is_recorded_output(e.channel, e.data)) return;
+    std::vector<uint8_t> data = e.data;
+    // A changed setting (--set) is meant too: the replayed modules' recorded configurations become
+    // the ones they ran with, so the next check (without --set) runs them the same way.
+    if (e.channel == config_channel && !options.sets.empty()) {
+      if (auto c = runtime::decode<node_config_t>(e.data)) {
+        for (const auto& m : replayer.modules())
+          if (m.name == c->module && !m.config_json.empty()) {
+            c->config_json = m.config_json;
+            data = runtime::encode(*c);
+          }
+      }
+    }
+    if (!updated->write(e.utime, e.channel, data.data(), data.size())) throw std::runtime_error("cannot write " + update_tmp);
   });
   print_modules(replayer, "");
   if (check) {
@@ -297,6 +318,14 @@ int Main(int argc, char** argv) {
   }
   const CheckCounts& c = checker.counts();
   if (!checker.first_divergence().empty()) std::cout << "first divergence: " << checker.first_divergence() << "\n";
+  if (!c.compared_by_channel.empty()) {
+    std::cout << "compared per channel:";
+    for (const auto& [ch, n] : c.compared_by_channel) {
+      const auto m = c.mismatches_by_channel.find(ch);
+      std::cout << " " << ch << " " << n << (m == c.mismatches_by_channel.end() ? "" : " (" + std::to_string(m->second) + " mismatches)");
+    }
+    std::cout << "\n";
+  }
   std::cout << c.compared << " compared, " << c.mismatches << " mismatches (" << replayer.events() << " log events, "
             << outputs_seen << " outputs replayed, " << c.not_in_log << " not in the log, " << c.orphans
             << " recorded outputs without their input" << (damage.empty() ? "" : "; THE LOG IS DAMAGED OR INCOMPLETE")

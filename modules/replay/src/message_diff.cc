@@ -5,6 +5,9 @@
 #include <regex>
 #include <tuple>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
 #include "bricklayer/inspect/lcm_decoder.h"
 #include "bricklayer/inspect/lcm_schema.h"
 
@@ -37,9 +40,55 @@ std::string generic(const std::string& path) {
   return std::regex_replace(path, index, "[]");
 }
 
+// image_t's format values (lcmtypes/image_t.lcm).
+constexpr int kFormatJpeg = 1, kFormatPng = 2;
+
+// An encoded picture is compared as the picture it decodes to: the same pixels encode to other bytes
+// with another encoder build (libjpeg-turbo's SIMD paths, zlib's level), so bytes that differ are
+// decoded and compared pixel by pixel: PNG exactly, JPEG within kJpegTolerance levels. "" when equal.
+std::string picture_difference(const Json& image_a, const Json& image_b) {
+  const auto& da = image_a.at("data").get_binary();
+  const auto& db = image_b.at("data").get_binary();
+  const int format = image_a.at("format").get<int>();
+  const cv::Mat a = cv::imdecode(cv::Mat(1, static_cast<int>(da.size()), CV_8U, const_cast<uint8_t*>(da.data())), cv::IMREAD_UNCHANGED);
+  const cv::Mat b = cv::imdecode(cv::Mat(1, static_cast<int>(db.size()), CV_8U, const_cast<uint8_t*>(db.data())), cv::IMREAD_UNCHANGED);
+  if (a.empty() || b.empty()) return std::string(a.empty() ? "the log's" : "the replay's") + " picture does not decode";
+  if (a.size() != b.size() || a.type() != b.type())
+    return "pictures of " + std::to_string(a.cols) + "x" + std::to_string(a.rows) + " vs " + std::to_string(b.cols) + "x" +
+           std::to_string(b.rows);
+  double worst = 0;
+  cv::Point at;
+  cv::Mat diff;
+  cv::absdiff(a, b, diff);
+  cv::minMaxLoc(diff.reshape(1, diff.rows), nullptr, &worst, nullptr, &at);
+  const double tolerance = format == kFormatJpeg ? MessageDiff::kJpegTolerance : 0;
+  if (worst <= tolerance) return "";
+  return "pixels differ by up to " + std::to_string(static_cast<int>(worst)) + " levels (at x " +
+         std::to_string(at.x / std::max(1, a.channels())) + ", y " + std::to_string(at.y) + ")";
+}
+
+bool is_picture(const Json& j) {
+  if (!j.is_object() || !j.contains("data") || !j.contains("format") || !j.at("data").is_binary()) return false;
+  const Json& f = j.at("format");
+  return f.is_number_integer() && (f.get<int>() == kFormatJpeg || f.get<int>() == kFormatPng);
+}
+
 void walk(const Json& a, const Json& b, const std::string& path, std::vector<FieldDifference>& out,
           const std::function<bool(const std::string&)>& skip) {
   if (skip(path)) return;
+  if (is_picture(a) && is_picture(b) && a.at("format") == b.at("format") && a.at("data") != b.at("data")) {
+    const std::string p = path.empty() ? "data" : path + ".data";
+    if (!skip(p)) {
+      const std::string d = picture_difference(a, b);
+      if (!d.empty()) out.push_back({p, "the recorded picture", d});
+    }
+    // The other fields as usual; size follows the bytes.
+    for (auto it = a.begin(); it != a.end(); ++it) {
+      if (it.key() == "data" || it.key() == "size" || !b.contains(it.key())) continue;
+      walk(it.value(), b.at(it.key()), path.empty() ? it.key() : path + "." + it.key(), out, skip);
+    }
+    return;
+  }
   if (a.is_object() && b.is_object()) {
     for (auto it = a.begin(); it != a.end(); ++it) {
       const std::string p = path.empty() ? it.key() : path + "." + it.key();

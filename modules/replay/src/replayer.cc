@@ -1,6 +1,10 @@
 #include "bricklayer/replay/replayer.h"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
+#include <filesystem>
 #include <stdexcept>
 
 #include "bricklayer/common/channels.h"
@@ -15,6 +19,8 @@ namespace {
 constexpr int64_t kStepUs = 20'000;
 // How far into the range a module's recorded configuration is looked for (nodes record it every 10 s).
 constexpr int64_t kConfigScanUs = 60'000'000;
+// A module that started at most this long before the log's first event starts the replay's clock.
+constexpr int64_t kEarlyStartUs = 1'000'000;
 }  // namespace
 
 std::pair<std::string, std::string> split_set(const std::string& set) {
@@ -25,7 +31,7 @@ std::pair<std::string, std::string> split_set(const std::string& set) {
 }
 
 std::vector<RecordedModule> Replayer::recorded_modules(const std::vector<std::string>& sources, int64_t from_utime,
-                                                      int64_t* first_utime) {
+                                                      int64_t* first_utime, std::vector<uint8_t>* first_calibration) {
   std::vector<RecordedModule> out;
   auto entry = [&out](const std::string& module) -> RecordedModule& {
     for (auto& m : out)
@@ -34,7 +40,8 @@ std::vector<RecordedModule> Replayer::recorded_modules(const std::vector<std::st
     return out.back();
   };
   RecordingReader reader(sources, from_utime);
-  const std::string config_channel = channel(kConfigChannel), heartbeat_channel = channel(kHeartbeatChannel);
+  const std::string config_channel = channel(kConfigChannel), heartbeat_channel = channel(kHeartbeatChannel),
+                    calibration_channel = channel(kCalibrationChannel);
   runtime::LogEvent e;
   int64_t first = -1;
   while (reader.next(e)) {
@@ -44,7 +51,9 @@ std::vector<RecordedModule> Replayer::recorded_modules(const std::vector<std::st
       if (first_utime) *first_utime = first;
     }
     if (e.utime > first + kConfigScanUs) break;
-    if (e.channel == config_channel) {
+    if (e.channel == calibration_channel && first_calibration && first_calibration->empty()) {
+      *first_calibration = e.data;
+    } else if (e.channel == config_channel) {
       const auto c = runtime::decode<node_config_t>(e.data);
       if (c && entry(c->module).config_json.empty()) entry(c->module).config_json = c->config_json;
     } else if (e.channel == heartbeat_channel) {
@@ -86,10 +95,23 @@ Replayer::Replayer(std::vector<std::string> sources, ReplayOptions options, Sink
       }() + ") has that field");
   }
   int64_t start = 0;
-  const auto recorded = recorded_modules(sources_, options_.from_utime, &start);
+  const auto recorded = recorded_modules(sources_, options_.from_utime, &start, &context_.recorded_calibration);
+  // A folder of the replay's own for what a node writes (a calibration run's file), never the live ones.
+  static std::atomic<int> replays{0};
+  const auto scratch = std::filesystem::temp_directory_path() /
+                       ("bricklayer-replay-" + std::to_string(::getpid()) + "-" + std::to_string(replays++));
+  std::filesystem::create_directories(scratch);
+  context_.scratch_dir = scratch.string();
   reader_ = std::make_unique<RecordingReader>(sources_, options_.from_utime);
   // The clock starts at the range's first event, before any node reads it (its start, first heartbeat
-  // and timers count from there).
+  // and timers count from there); or when a replayed module started, if that was just before the
+  // first event (a log whose first events are the nodes' first step): its timers (staleness, rounds,
+  // animations) count from its own start, as live.
+  if (options_.from_utime == 0)
+    for (const auto& r : recorded)
+      if (std::find(options_.modules.begin(), options_.modules.end(), r.module) != options_.modules.end() &&
+          r.start_utime >= 0 && r.start_utime < start && start - r.start_utime <= kEarlyStartUs)
+        start = r.start_utime;
   hub_ = std::make_unique<runtime::InProcessBus>(start);
   player_ = &hub_->endpoint("log");
   adapters_ = adapters;
@@ -119,7 +141,17 @@ Replayer::Replayer(std::vector<std::string> sources, ReplayOptions options, Sink
   });
 }
 
-Replayer::~Replayer() = default;
+Replayer::~Replayer() {
+  nodes_.clear();
+  std::error_code ec;
+  if (!context_.scratch_dir.empty()) std::filesystem::remove_all(context_.scratch_dir, ec);
+}
+
+bool Replayer::is_recorded_output(const std::string& ch, const std::vector<uint8_t>& bytes) const {
+  for (const auto* a : adapters_)
+    if (a->is_output(ch, bytes)) return true;
+  return false;
+}
 
 void Replayer::start_due(int64_t utime) {
   for (size_t i = 0; i < modules_.size(); ++i) {
@@ -127,7 +159,8 @@ void Replayer::start_due(int64_t utime) {
     ReplayedModule& m = modules_[i];
     BuiltNode built;
     try {
-      built = adapters_[i]->build(m.config_recorded ? m.config_json : std::string(), sets_[i], hub_->endpoint(m.name));
+      built = adapters_[i]->build(m.config_recorded ? m.config_json : std::string(), sets_[i], hub_->endpoint(m.name),
+                                   context_);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(m.name + ": " + e.what());
     }
@@ -153,7 +186,7 @@ bool Replayer::advance() {
   if (ended_) return false;
   runtime::LogEvent e;
   for (;;) {
-    if (!reader_->next(e) || e.utime > options_.to_utime) {
+    if (!read(e) || e.utime > options_.to_utime) {
       settle();
       ended_ = true;
       return false;
@@ -175,13 +208,41 @@ bool Replayer::advance() {
   start_due(hub_->now_utime());
   last_utime_ = hub_->now_utime();
   if (observer_) observer_(e);
-  if (std::find(compared_.begin(), compared_.end(), e.channel) != compared_.end()) {
+  const ModuleAdapter* owner = nullptr;
+  for (const auto* a : adapters_)
+    if (a->is_output(e.channel, e.data)) owner = a;
+  if (owner) {
     sink_(true, e.channel, e.data, last_utime_);
+    // The live node ticked here (its output says so): a timer due now fires now in the replay too.
+    if (owner->ticks_at_outputs) settle();
   } else {
     player_->publish(e.channel, e.data.data(), e.data.size());
-    settle();
+    // Messages of one instant reach a live node together (one wait, then its handlers, then its
+    // tick): the next event at the same time is delivered before the nodes handle and tick.
+    runtime::LogEvent* next = peek();
+    const bool same_instant = next && next->utime == e.utime && next->utime <= options_.to_utime &&
+                              !is_recorded_output(next->channel, next->data);
+    if (!same_instant) settle();
   }
   return true;
+}
+
+bool Replayer::read(runtime::LogEvent& e) {
+  if (peeked_) {
+    e = std::move(*peeked_);
+    peeked_.reset();
+    return true;
+  }
+  return reader_->next(e);
+}
+
+runtime::LogEvent* Replayer::peek() {
+  if (!peeked_) {
+    runtime::LogEvent e;
+    if (!reader_->next(e)) return nullptr;
+    peeked_ = std::move(e);
+  }
+  return &*peeked_;
 }
 
 void Replayer::run(const std::function<void(int64_t, int64_t, int64_t)>& progress) {

@@ -31,6 +31,10 @@ class MessageDiff {
   // or a whole type ("timing_t").
   explicit MessageDiff(std::vector<std::string> ignored = {});
 
+  // Encoded pictures (an image_t anywhere in a message) whose bytes differ are compared decoded: PNG
+  // pixel for pixel, JPEG within this many levels per channel (another encoder build's rounding).
+  static constexpr int kJpegTolerance = 2;
+
   // The message's type name ("prediction_t"), "" when the bytes are no known type.
   std::string type_of(const uint8_t* data, size_t size) const;
   // utime (first member) and frame_number (when the type has it); nullopt when the bytes do not decode.

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -18,28 +19,69 @@ namespace bricklayer::replay {
 
 struct BuiltNode {
   std::unique_ptr<runtime::Node> node;
-  std::string config_json;           // the configuration it runs with
-  std::vector<std::string> notes;    // recorded keys this build does not know (left out), ...
+  std::string config_json;           // the configuration it runs with (as live: before the replay's own settings)
+  std::vector<std::string> notes;    // recorded keys this build does not know (left out), replay settings, ...
+};
+
+// What a replay gives a module's build besides its configuration.
+struct BuildContext {
+  std::string scratch_dir;  // a folder of this replay's own (files a node writes go here, never the live ones)
+  // The first calibration_t recorded on BL_CALIBRATION in the range (encoded; empty when none): the
+  // calibration file a serving node loaded live, which is not in the log itself.
+  std::vector<uint8_t> recorded_calibration;
 };
 
 struct ModuleAdapter {
   std::string name;      // its heartbeat_t.module / node_config_t.module: "prediction"
   std::string program;   // "bricklayer-prediction"
   std::vector<std::string> compared;  // its output channels, compared with the recorded ones
+  // Whether a recorded event on one of the compared channels is this module's output (not delivered,
+  // compared) rather than another's message on a shared channel (delivered): BL_COMMAND carries the
+  // calibration's pattern commands and the operator's. Empty: every event on a compared channel is.
+  std::function<bool(const std::string& channel, const std::vector<uint8_t>& bytes)> owns;
+  // Fields of its output types that are run-to-run (never compared while it is replayed), with why.
+  std::vector<std::string> ignored;
+  // Its outputs are stamped with its own clock at a loop tick (timers, refreshes), not with the input
+  // they answer: the replay ticks it at the time of each of its recorded outputs as well, so a tick
+  // the live node published on is a tick of the replay too.
+  bool ticks_at_outputs = false;
   // recorded_json: the node_config_t.config_json recorded ("" = none: the defaults). sets: "name=value".
   // Throws std::invalid_argument for an override that names no field or breaks its rule.
-  std::function<BuiltNode(const std::string& recorded_json, const std::vector<std::string>& sets, runtime::Bus& bus)> build;
+  std::function<BuiltNode(const std::string& recorded_json, const std::vector<std::string>& sets, runtime::Bus& bus,
+                          const BuildContext& context)>
+      build;
   // The configuration's declaration (runtime::describe), for --help and errors.
   std::function<std::string()> describe;
+
+  bool is_output(const std::string& channel, const std::vector<uint8_t>& bytes) const {
+    if (std::find(compared.begin(), compared.end(), channel) == compared.end()) return false;
+    return !owns || owns(channel, bytes);
+  }
+};
+
+// How a module runs in a replay beyond its recorded configuration (node_adapter's options).
+template <typename Config>
+struct AdapterOptions {
+  std::function<bool(const std::string&, const std::vector<uint8_t>&)> owns;
+  std::vector<std::string> ignored;
+  bool ticks_at_outputs = false;
+  // Settings a replay must force (no screen, no sound, no live files): applied after the recorded
+  // configuration and --set; returns the notes that say what was changed.
+  std::function<std::vector<std::string>(Config&, const BuildContext&)> replay_settings;
 };
 
 template <typename NodeType>
-ModuleAdapter node_adapter(std::string name, std::vector<std::string> compared) {
+ModuleAdapter node_adapter(std::string name, std::vector<std::string> compared,
+                           AdapterOptions<typename NodeType::Config> options = {}) {
   ModuleAdapter a;
   a.name = std::move(name);
   a.program = NodeType::kProgram;
   a.compared = std::move(compared);
-  a.build = [](const std::string& recorded, const std::vector<std::string>& sets, runtime::Bus& bus) {
+  a.owns = options.owns;
+  a.ignored = options.ignored;
+  a.ticks_at_outputs = options.ticks_at_outputs;
+  a.build = [replay_settings = options.replay_settings](const std::string& recorded, const std::vector<std::string>& sets,
+                                                        runtime::Bus& bus, const BuildContext& context) {
     typename NodeType::Config config;
     BuiltNode built;
     if (!recorded.empty()) {
@@ -59,7 +101,11 @@ ModuleAdapter node_adapter(std::string name, std::vector<std::string> compared) 
       runtime::from_json(j, config);
     }
     for (const auto& s : sets) runtime::set_from_text(s, config);
+    // What it runs with as live would (the configuration --update records); the replay's own
+    // settings on top are said in the notes.
     built.config_json = runtime::to_json(config).dump();
+    if (replay_settings)
+      for (auto& n : replay_settings(config, context)) built.notes.push_back(std::move(n));
     built.node = std::make_unique<NodeType>(config, bus);
     built.node->set_config(NodeType::kProgram, built.config_json);
     return built;

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,9 @@ class Replayer {
   const std::vector<ReplayedModule>& modules() const { return modules_; }
   // Every channel a replayed module's outputs are compared on.
   const std::vector<std::string>& compared_channels() const { return compared_; }
+  // Whether a recorded event is a replayed module's output (compared, not delivered). On a channel
+  // shared with others (BL_COMMAND) only the module's own messages are.
+  bool is_recorded_output(const std::string& channel, const std::vector<uint8_t>& bytes) const;
   // Every event that passed through (all channels), and the first and last log time replayed.
   int64_t events() const { return events_; }
   int64_t first_utime() const { return first_utime_; }
@@ -78,12 +82,17 @@ class Replayer {
   // The configuration each module recorded first in the range and when it started (scanning from the
   // range's start, at most 60 s in). first_utime: set to the range's first event time (unchanged when the
   // range is empty).
+  // first_calibration: set to the first calibration_t recorded on BL_CALIBRATION in that stretch.
   static std::vector<RecordedModule> recorded_modules(const std::vector<std::string>& sources, int64_t from_utime,
-                                                      int64_t* first_utime = nullptr);
+                                                      int64_t* first_utime = nullptr,
+                                                      std::vector<uint8_t>* first_calibration = nullptr);
 
  private:
   void settle();
   void step_all();
+  // The next event of the range (the one peeked at first, if any); the next one without taking it.
+  bool read(runtime::LogEvent& e);
+  runtime::LogEvent* peek();
   // Builds the nodes whose start has come (a node that started late live misses what came before, as
   // the live one did: the projector image it never saw, the frames before it listened).
   void start_due(int64_t utime);
@@ -93,6 +102,7 @@ class Replayer {
   Sink sink_;
   std::function<void(const runtime::LogEvent&)> observer_;
   std::unique_ptr<RecordingReader> reader_;
+  std::optional<runtime::LogEvent> peeked_;
   std::unique_ptr<runtime::InProcessBus> hub_;
   runtime::Bus* player_ = nullptr;
   std::vector<std::unique_ptr<runtime::Node>> nodes_;  // null until the module's start
@@ -100,6 +110,7 @@ class Replayer {
   std::vector<const ModuleAdapter*> adapters_;
   std::vector<std::vector<std::string>> sets_;
   std::vector<std::string> compared_;
+  BuildContext context_;  // its scratch folder is removed with the replayer
   int64_t events_ = 0, first_utime_ = 0, last_utime_ = 0;
   bool started_ = false, ended_ = false;
 };
