@@ -6,12 +6,13 @@
 #include <cstdio>
 #include <random>
 
-#include "bricklayer/core/generate.h"
 #include "bricklayer/core/knife_edge.h"
-#include "piles.h"
+#include "bricklayer/piles/chaotic_pile.h"
+#include "bricklayer/piles/known.h"
+#include "bricklayer/piles/player_pile.h"
 
 using namespace bricklayer::core;
-using namespace bricklayer::core::testing;
+using namespace bricklayer::piles;
 
 namespace {
 
@@ -195,7 +196,7 @@ TEST_CASE("sampled placements never contradict a certain verdict, how often a kn
     }
   }
   for (int k = 0; k < 150; ++k) piles.push_back(player_pile(6 + k % 40, 7000 + static_cast<uint64_t>(k)));
-  for (int k = 0; k < 100; ++k) piles.push_back(random_pile(3 + k % 10, 9000 + static_cast<uint64_t>(k)));
+  for (int k = 0; k < 100; ++k) piles.push_back(chaotic_pile(3 + k % 10, 9000 + static_cast<uint64_t>(k)));
   int knife = 0;
   int knife_agreeing = 0;
   int certain = 0;
@@ -226,7 +227,7 @@ TEST_CASE("piles whose verdict survives every sampled move up to 0.015 are never
   int checked = 0;
   for (int k = 0; k < 300; ++k) {
     const Stack s = k < 200 ? player_pile(6 + k % 55, 12000 + static_cast<uint64_t>(k))
-                            : random_pile(3 + k % 12, 13000 + static_cast<uint64_t>(k));
+                            : chaotic_pile(3 + k % 12, 13000 + static_cast<uint64_t>(k));
     const Prediction exact = predict(s);
     const Sampled wide = sample(s, 0.015, 200, 500 + static_cast<uint64_t>(k));
     if (exact.balanced ? wide.falls > 0 : wide.stands > 0) continue;  // a verdict that hinges on 0.015

@@ -4,12 +4,13 @@
 
 #include <random>
 
-#include "bricklayer/core/generate.h"
 #include "bricklayer/core/predict.h"
-#include "piles.h"
+#include "bricklayer/piles/chaotic_pile.h"
+#include "bricklayer/piles/known.h"
+#include "bricklayer/piles/player_pile.h"
 
 using namespace bricklayer::core;
-using namespace bricklayer::core::testing;
+using namespace bricklayer::piles;
 
 namespace {
 
@@ -104,7 +105,7 @@ TEST_CASE("piles with a clear margin either way get the same verdict and causes 
   int compared = 0, unbalanced = 0;
   for (uint64_t seed = 1; seed <= 400; ++seed) {
     const int n = 8 + static_cast<int>(seed % 40);
-    const Stack s = seed % 2 ? player_pile(n, seed) : random_pile(n, seed);
+    const Stack s = seed % 2 ? player_pile(n, seed) : chaotic_pile(n, seed);
     PredictOptions exact, lenient, far;
     lenient.position_tolerance = kT;
     far.position_tolerance = 4 * kT;  // the verdict must not hinge on the widening

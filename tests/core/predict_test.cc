@@ -6,11 +6,12 @@
 
 #include "bricklayer/core/contacts.h"
 #include "bricklayer/core/dynamics.h"
-#include "bricklayer/core/generate.h"
-#include "piles.h"
+#include "bricklayer/piles/chaotic_pile.h"
+#include "bricklayer/piles/known.h"
+#include "bricklayer/piles/player_pile.h"
 
 using namespace bricklayer::core;
-using namespace bricklayer::core::testing;
+using namespace bricklayer::piles;
 using Ids = std::vector<int64_t>;
 
 namespace {
@@ -103,7 +104,7 @@ TEST_CASE("score and overhang, an empty pile is balanced") {
 TEST_CASE("balanced by the LP == all initial accelerations zero, on a few hundred generated piles") {
   int unbalanced = 0;
   for (uint64_t seed = 0; seed < 300; ++seed) {
-    const Stack s = seed % 2 ? random_pile(4 + static_cast<int>(seed % 23), seed) : player_pile(5 + static_cast<int>(seed % 40), seed);
+    const Stack s = seed % 2 ? chaotic_pile(4 + static_cast<int>(seed % 23), seed) : player_pile(5 + static_cast<int>(seed % 40), seed);
     const ContactGraph g = build_contacts(s);
     const bool lp_balanced = balance_violation(g, "clp") <= kBalanceTolerance;
     const Accelerations acc = initial_accelerations(g);
@@ -119,7 +120,7 @@ TEST_CASE("balanced by the LP == all initial accelerations zero, on a few hundre
 
 TEST_CASE("exact causes are never empty for an unbalanced pile, and every cause moves when its lower rows are held") {
   for (uint64_t seed = 0; seed < 200; ++seed) {
-    const Stack s = random_pile(3 + static_cast<int>(seed % 30), 1000 + seed);
+    const Stack s = chaotic_pile(3 + static_cast<int>(seed % 30), 1000 + seed);
     const Prediction p = run(s, Annotator::kExact, "clp", QpMethod::kNnls, seed % 2 == 0);
     INFO("seed " << seed);
     CHECK(p.balanced == p.causes().empty());
@@ -149,7 +150,7 @@ TEST_CASE("the LP-first shortcut changes nothing") {
 
 TEST_CASE("CLP and NLopt agree on a generated set of small stacks") {
   for (uint64_t seed = 0; seed < 40; ++seed) {
-    const Stack s = random_pile(3 + static_cast<int>(seed % 6), 7000 + seed);
+    const Stack s = chaotic_pile(3 + static_cast<int>(seed % 6), 7000 + seed);
     INFO("seed " << seed);
     for (Annotator a : {Annotator::kBalance, Annotator::kExact, Annotator::kPaper}) {
       INFO(to_string(a));
@@ -163,7 +164,7 @@ TEST_CASE("CLP and NLopt agree on a generated set of small stacks") {
 
 TEST_CASE("the NNLS dual and NLopt's primal QP give the same accelerations") {
   for (uint64_t seed = 0; seed < 40; ++seed) {
-    const Stack s = random_pile(3 + static_cast<int>(seed % 8), 9000 + seed);
+    const Stack s = chaotic_pile(3 + static_cast<int>(seed % 8), 9000 + seed);
     const ContactGraph g = build_contacts(s);
     const Accelerations nnls = initial_accelerations(g, {}, QpMethod::kNnls);
     const Accelerations slsqp = initial_accelerations(g, {}, QpMethod::kNlopt);

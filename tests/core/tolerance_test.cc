@@ -1,12 +1,13 @@
 // The tolerance policy (modules/core/README.md), tested on both sides of the knife edge.
 #include <catch2/catch.hpp>
 
-#include "bricklayer/core/generate.h"
 #include "bricklayer/core/predict.h"
-#include "piles.h"
+#include "bricklayer/piles/chaotic_pile.h"
+#include "bricklayer/piles/known.h"
+#include "bricklayer/piles/player_pile.h"
 
 using namespace bricklayer::core;
-using namespace bricklayer::core::testing;
+using namespace bricklayer::piles;
 
 namespace {
 

@@ -9,7 +9,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "bricklayer/simcam/piles.h"
+#include "bricklayer/piles/random_pile.h"
 #include "bricklayer/simcam/render.h"
 #include "bricklayer/detection/detector.h"
 #include "evaluate.h"
@@ -67,9 +67,9 @@ TEST_CASE("every rendered block is found once, in its row, within 0.02 block len
   simcam::Renderer renderer;
   detection::Detector detector;
   for (uint64_t seed = 1; seed <= 4; ++seed) {
-    simcam::PileOptions options;
+    piles::PileOptions options;
     options.blocks = 20 + 10 * static_cast<int>(seed);
-    core::Stack pile = simcam::random_pile(100 * level + seed, options);
+    core::Stack pile = piles::random_pile(100 * level + seed, options);
     cv::Mat light = lit_by_prediction(pile);
     if (projected) detector.set_projector_image(light, {kDefaultProjectorWidth, kDefaultProjectorHeight});
     else detector.clear_projector_image();
@@ -133,10 +133,10 @@ TEST_CASE("at the harsh nuisance level blocks are found with recall and precisio
   detection::eval::FrameScore total;
   std::vector<double> dx;
   for (uint64_t seed = 500; seed < 520; ++seed) {
-    simcam::PileOptions options;
+    piles::PileOptions options;
     options.blocks = 10 + static_cast<int>((seed * 37) % 71);
     options.min_gap = seed % 3 == 0 ? 0.0 : 0.02;
-    const core::Stack pile = simcam::random_pile(seed, options);
+    const core::Stack pile = piles::random_pile(seed, options);
     const cv::Mat light = detection::eval::red_blue_projection(pile, renderer.camera(), renderer.projector());
     if (projected)
       detector.set_projector_image(light, renderer.projector().size);

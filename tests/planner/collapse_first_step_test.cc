@@ -16,9 +16,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "../core/piles.h"
-#include "bricklayer/core/generate.h"
 #include "bricklayer/core/predict.h"
+#include "bricklayer/piles/chaotic_pile.h"
+#include "bricklayer/piles/known.h"
+#include "bricklayer/piles/player_pile.h"
 #include "bricklayer/planner/piles.h"
 
 using namespace bricklayer;
@@ -46,29 +47,29 @@ core::Stack from_rows(const nlohmann::json& blocks) {
 // as the shared fixtures), the planner's shipped best stacks and harmonic stacks.
 std::vector<Pile> knife_edge_stacks() {
   std::vector<Pile> out;
-  for (const core::Stack& s : core::testing::fixture_stacks()) out.push_back({"optimal-" + std::to_string(s.blocks.size()), s});
+  for (const core::Stack& s : piles::fixture_stacks()) out.push_back({"optimal-" + std::to_string(s.blocks.size()), s});
   std::ifstream in(std::string(BRICKLAYER_SOURCE_DIR) + "/modules/planner/data/best_overhang_stacks.json");
   REQUIRE(in);
   const nlohmann::json shipped = nlohmann::json::parse(in);
   for (const auto& [n, stack] : shipped.items()) out.push_back({"best-" + n, from_rows(stack.at("blocks"))});
-  for (int n = 1; n <= 40; ++n) out.push_back({"harmonic-" + std::to_string(n), core::harmonic_stack(n)});
+  for (int n = 1; n <= 40; ++n) out.push_back({"harmonic-" + std::to_string(n), piles::harmonic_stack(n)});
   return out;
 }
 
 // The piles checked (the unbalanced ones among them: a balanced pile gets no preview). Deterministic.
-std::vector<Pile> piles() {
+std::vector<Pile> checked_piles() {
   std::vector<Pile> out;
   auto add = [&out](std::string name, core::Stack s) { out.push_back({std::move(name), std::move(s)}); };
   // Knife-edge stacks moved past the edge: the whole stack by d, and the rightmost block alone by d.
   for (const Pile& p : knife_edge_stacks())
     for (double d : {1e-4, 1e-3, 1e-2, 0.1, 0.4}) {
       add(p.name + " shifted " + std::to_string(d), shifted(p.stack, d));
-      add(p.name + " rightmost pushed " + std::to_string(d), core::testing::push_rightmost(p.stack, d));
+      add(p.name + " rightmost pushed " + std::to_string(d), piles::push_rightmost(p.stack, d));
     }
   // Piles as players build them (mostly balanced; the unbalanced ones are kept below).
-  for (uint64_t seed = 1; seed <= 1500; ++seed) add("player " + std::to_string(seed), core::player_pile(5 + static_cast<int>(seed % 56), seed));
+  for (uint64_t seed = 1; seed <= 1500; ++seed) add("player " + std::to_string(seed), piles::player_pile(5 + static_cast<int>(seed % 56), seed));
   // Chaotic piles: blocks bridging, overhanging both ways, floating; block heights 0.2 to 0.6.
-  for (uint64_t seed = 1; seed <= 400; ++seed) add("random " + std::to_string(seed), core::testing::random_pile(3 + static_cast<int>(seed % 40), seed));
+  for (uint64_t seed = 1; seed <= 400; ++seed) add("random " + std::to_string(seed), piles::chaotic_pile(3 + static_cast<int>(seed % 40), seed));
   // The preview benchmark's kinds, smaller and larger.
   for (uint64_t seed = 1; seed <= 60; ++seed) {
     const int rows = 3 + static_cast<int>(seed % 10), per_row = 2 + static_cast<int>(seed % 4);
@@ -117,7 +118,7 @@ bool ends_close(const core::Stack& s) {
 }  // namespace
 
 TEST_CASE("the preview's first step moves the blocks the exact annotator moves, the same way") {
-  const std::vector<Pile> all = piles();
+  const std::vector<Pile> all = checked_piles();
   planner::CollapseOptions first_step;
   first_step.max_time = 0.05;  // only the first step is compared; it is the full preview's first step (below)
   int checked = 0, sideways_piles = 0, blocks = 0, moving = 0, causes_at_rest = 0;

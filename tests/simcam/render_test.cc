@@ -7,7 +7,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "bricklayer/simcam/piles.h"
+#include "bricklayer/piles/random_pile.h"
 
 using namespace bricklayer;
 using namespace bricklayer::simcam;
@@ -57,7 +57,7 @@ double line_centre(const cv::Mat& g, int v, double u, double left_bg, double rig
 }  // namespace
 
 TEST_CASE("render: the same inputs and seed give identical frames, another seed other noise") {
-  core::Stack s = random_pile(3, {.blocks = 25});
+  core::Stack s = piles::random_pile(3, {.blocks = 25});
   Nuisance n = Nuisance::level(3);
   Renderer r(CameraSetup::random(11), ProjectorSetup::random(11));
   cv::Mat light(200, 300, CV_8UC3, cv::Scalar(255, 0, 0));
@@ -282,7 +282,7 @@ TEST_CASE("render: bad input is an exception with a message, not a crash") {
 
 TEST_CASE("random piles: exact count, no overlaps within a row, deterministic") {
   for (int n : {10, 40, 80}) {
-    core::Stack a = random_pile(static_cast<uint64_t>(n), {.blocks = n}), b = random_pile(static_cast<uint64_t>(n), {.blocks = n});
+    core::Stack a = piles::random_pile(static_cast<uint64_t>(n), {.blocks = n}), b = piles::random_pile(static_cast<uint64_t>(n), {.blocks = n});
     REQUIRE(static_cast<int>(a.blocks.size()) == n);
     for (size_t i = 0; i < a.blocks.size(); ++i) CHECK(a.blocks[i].x == b.blocks[i].x);
     for (const auto& p : a.blocks)

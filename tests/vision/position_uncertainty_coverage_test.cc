@@ -14,7 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "bricklayer/common/channels.h"
-#include "bricklayer/simcam/piles.h"
+#include "bricklayer/piles/random_pile.h"
 #include "bricklayer/simcam/render.h"
 #include "bricklayer/stack_t.hpp"
 #include "bricklayer/vision/vision_node.h"
@@ -88,10 +88,10 @@ Figures run_scene(const Scene& scene, int piles, int frames, uint64_t seed) {
   const simcam::Renderer renderer(camera);
   const std::string images = channel(kImageChannel), stacks = channel(kStackChannel);
   for (int p = 0; p < piles; ++p) {
-    simcam::PileOptions options;
+    piles::PileOptions options;
     options.blocks = 14;
     options.min_gap = p % 3 == 0 ? 0.0 : (p % 3 == 1 ? 0.02 : 0.1);
-    const core::Stack pile = simcam::random_pile(seed + static_cast<uint64_t>(p), options);
+    const core::Stack pile = piles::random_pile(seed + static_cast<uint64_t>(p), options);
     harness::Rig rig;
     rig.add<vision::VisionNode>(vision::VisionConfig{});
     auto& rec = rig.record({stacks});

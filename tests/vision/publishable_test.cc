@@ -9,7 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "bricklayer/prediction/prediction_logic.h"
-#include "bricklayer/simcam/piles.h"
+#include "bricklayer/piles/random_pile.h"
 #include "bricklayer/simcam/render.h"
 #include "bricklayer/detection/detector.h"
 #include "bricklayer/vision/publishable.h"
@@ -100,7 +100,7 @@ TEST_CASE("soak-like piles never give a stack prediction rejects, before or afte
   // so the filter holds blocks of one pile while the next arrives; here also with touching blocks and at
   // the harsh nuisance level.
   simcam::Renderer renderer;
-  simcam::PileOptions options;
+  piles::PileOptions options;
   options.blocks = 200;
   options.max_per_row = 17;
   options.min_gap = GENERATE(0.0, 0.02);
@@ -113,7 +113,7 @@ TEST_CASE("soak-like piles never give a stack prediction rejects, before or afte
   int invalid_unruled = 0;  // filtered stacks prediction would have rejected without the rules
   for (int cycle = 0; cycle < 3; ++cycle) {
     for (uint64_t seed = 1000; seed < 1008; ++seed, ++frames) {
-      const auto r = renderer.render(simcam::random_pile(seed, options), simcam::Nuisance::level(level), nullptr,
+      const auto r = renderer.render(piles::random_pile(seed, options), simcam::Nuisance::level(level), nullptr,
                                      seed * 10 + static_cast<uint64_t>(cycle));
       std::vector<uint8_t> jpeg;
       cv::imencode(".jpg", r.bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90});

@@ -1,5 +1,5 @@
 // bricklayer-bench-predict: median and p99 latency and peak heap of predict() for each annotator x backend on
-// piles built as a player would (core::player_pile, fixed seeds), at several pile sizes.
+// piles built as a player would (piles::player_pile, fixed seeds), at several pile sizes.
 // Usage: bricklayer-bench-predict [--sizes 10,25,...] [--piles N] [--max-nlopt-blocks N] [--quick]
 #include <malloc.h>
 #include <time.h>
@@ -19,7 +19,7 @@
 
 #include "bricklayer/core/contacts.h"
 #include "bricklayer/core/dynamics.h"
-#include "bricklayer/core/generate.h"
+#include "bricklayer/piles/player_pile.h"
 #include "bricklayer/core/knife_edge.h"
 #include "bricklayer/core/predict.h"
 
@@ -52,6 +52,7 @@ void operator delete[](void* p, size_t) noexcept { operator delete(p); }
 namespace {
 
 using namespace bricklayer::core;
+using bricklayer::piles::player_pile;
 
 struct Config {
   Annotator annotator;

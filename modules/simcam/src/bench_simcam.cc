@@ -12,7 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bricklayer/common/flags.h"
-#include "bricklayer/simcam/piles.h"
+#include "bricklayer/piles/random_pile.h"
 #include "bricklayer/simcam/render.h"
 
 namespace {
@@ -48,7 +48,7 @@ int Main(int argc, char** argv) {
   const std::string out = flags.get("out");
   if (frames < 1) throw FlagError("--frames must be at least 1");
   if (!out.empty()) std::filesystem::create_directories(out);
-  PileOptions pile;
+  piles::PileOptions pile;
   pile.blocks = static_cast<int>(flags.get_int("blocks"));
 
   std::printf("%-10s %-8s %-10s %-10s %10s %10s\n", "size", "level", "setup", "projector", "median_ms", "p99_ms");
@@ -62,7 +62,7 @@ int Main(int argc, char** argv) {
           Nuisance n = Nuisance::level(level);
           std::vector<double> ms;
           for (int f = 0; f < frames; ++f) {
-            core::Stack stack = random_pile(static_cast<uint64_t>(f % 20), pile);
+            core::Stack stack = piles::random_pile(static_cast<uint64_t>(f % 20), pile);
             cv::Mat light = projecting ? red_blue_projection(stack, cam, proj) : cv::Mat();
             auto t0 = std::chrono::steady_clock::now();
             Rendered r = renderer.render(stack, n, projecting ? &light : nullptr, static_cast<uint64_t>(f));

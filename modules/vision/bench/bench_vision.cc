@@ -16,7 +16,7 @@
 
 #include "evaluate.h"
 #include "bricklayer/common/flags.h"
-#include "bricklayer/simcam/piles.h"
+#include "bricklayer/piles/random_pile.h"
 #include "bricklayer/simcam/render.h"
 #include "bricklayer/detection/detector.h"
 #include "bricklayer/vision/publishable.h"
@@ -78,10 +78,10 @@ struct Totals {
 // Random pile number `index`: 10..80 blocks, gaps from touching (0) to 0.8 block lengths.
 core::Stack pile(uint64_t seed, int index) {
   const uint64_t h = mix(seed * 1000003ULL + static_cast<uint64_t>(index));
-  simcam::PileOptions o;
+  piles::PileOptions o;
   o.blocks = 10 + static_cast<int>(h % 71);
   o.min_gap = (index % 3 == 0) ? 0.0 : (index % 3 == 1 ? 0.02 : 0.1);
-  return simcam::random_pile(h, o);
+  return piles::random_pile(h, o);
 }
 
 int Main(int argc, char** argv) {

@@ -1,11 +1,11 @@
-#include "bricklayer/simcam/piles.h"
+#include "bricklayer/piles/random_pile.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
-namespace bricklayer::simcam {
+namespace bricklayer::piles {
 namespace {
 uint64_t next(uint64_t& s) {
   uint64_t z = (s += 0x9E3779B97F4A7C15ULL);
@@ -47,4 +47,4 @@ core::Stack random_pile(uint64_t seed, const PileOptions& o) {
   return stack;
 }
 
-}  // namespace bricklayer::simcam
+}  // namespace bricklayer::piles

@@ -1,12 +1,12 @@
 // Random piles of blocks for benchmarks and tests (vision accuracy, simcam timing): a player's pile
-// seen by the default camera. Not necessarily balanced; blocks never overlap within a row.
+// seen by the default camera (rows shrinking upwards; a pile may grow past the top of the view). Not necessarily balanced; blocks never overlap within a row.
 #pragma once
 
 #include <cstdint>
 
 #include "bricklayer/core/stack.h"
 
-namespace bricklayer::simcam {
+namespace bricklayer::piles {
 
 struct PileOptions {
   int blocks = 30;          // exact number of blocks
@@ -21,4 +21,4 @@ struct PileOptions {
 // block_length 1, block_height 1/3, table_edge 0. Deterministic per seed.
 core::Stack random_pile(uint64_t seed, const PileOptions& options = {});
 
-}  // namespace bricklayer::simcam
+}  // namespace bricklayer::piles

@@ -1,27 +1,15 @@
-#include "bricklayer/core/generate.h"
+#include "bricklayer/piles/player_pile.h"
 
 #include <algorithm>
 #include <cmath>
 #include <random>
 
-namespace bricklayer::core {
+namespace bricklayer::piles {
 
-Stack harmonic_stack(int n, double block_height) {
-  Stack stack;
-  stack.block_height = block_height;
-  // Right end of the block k-th from the top: sum_{j=k}^{n} 1/(2j).
-  double right = 0.0;
-  for (int k = n; k >= 1; --k) {
-    right += 1.0 / (2.0 * k);
-    stack.blocks.push_back({static_cast<int64_t>(n - k), n - k, right - 1.0});
-  }
-  return stack;
-}
-
-Stack player_pile(int n, uint64_t seed, double block_height) {
+core::Stack player_pile(int n, uint64_t seed, double block_height) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  Stack stack;
+  core::Stack stack;
   stack.block_height = block_height;
   if (n <= 0) return stack;
   const int width = std::max(1, static_cast<int>(std::lround(std::sqrt(1.5 * n))));
@@ -46,4 +34,4 @@ Stack player_pile(int n, uint64_t seed, double block_height) {
   return stack;
 }
 
-}  // namespace bricklayer::core
+}  // namespace bricklayer::piles
