@@ -1,11 +1,7 @@
 // What the launcher's process tests share: a scratch root and bricklayer-launch started on a profile in it.
 #pragma once
 
-#include <unistd.h>
-
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -15,26 +11,20 @@
 
 namespace bricklayer::test {
 
+// A scratch root (harness::ScratchDir: removed at the end unless BRICKLAYER_KEEP_SCRATCH=1) with the
+// profile and output helpers the launcher tests use.
 struct TempDir {
+  harness::ScratchDir scratch;
   std::filesystem::path path;
-  explicit TempDir(const std::string& tag) {
-    path = std::filesystem::temp_directory_path() / ("bricklayer-launcher-" + tag + "-" + std::to_string(::getpid()));
-    std::filesystem::remove_all(path);
-    std::filesystem::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path, ec);
-  }
+  explicit TempDir(const std::string& tag) : scratch("launcher-" + tag), path(scratch.path()) {}
   std::filesystem::path write(const std::string& name, const std::string& text) const {
-    std::ofstream(path / name) << text;
+    harness::write_file(path / name, text);
     return path / name;
   }
+  // The file's text; "" while it does not exist yet (a launcher's output before its first line).
   std::string read(const std::string& name) const {
-    std::ifstream in(path / name);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
+    std::error_code ec;
+    return std::filesystem::exists(path / name, ec) ? harness::read_file(path / name) : "";
   }
 };
 
