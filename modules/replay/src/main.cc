@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <sstream>
 
@@ -247,12 +248,14 @@ int Main(int argc, char** argv) {
   const std::string update_tmp = sources[0] + ".updating";
   if (flags.get_bool("update")) updated = std::make_unique<runtime::LogWriter>(update_tmp);
   int64_t outputs_seen = 0;
+  std::map<std::string, int64_t> recorded_on;  // recorded outputs per compared channel
   std::vector<std::string> compared;
   Replayer replayer(sources, options, [&](bool recorded, const std::string& ch, const std::vector<uint8_t>& bytes, int64_t utime) {
     const bool is_compared = std::find(compared.begin(), compared.end(), ch) != compared.end();
     if (!is_compared) return;
     if (recorded) {
       if (check) checker.recorded(ch, bytes, utime);
+      ++recorded_on[ch];
       return;
     }
     ++outputs_seen;
@@ -282,6 +285,8 @@ int Main(int argc, char** argv) {
     if (!updated->write(e.utime, e.channel, data.data(), data.size())) throw std::runtime_error("cannot write " + update_tmp);
   });
   print_modules(replayer, "");
+  std::vector<size_t> notes_printed;
+  for (const auto& m : replayer.modules()) notes_printed.push_back(m.notes.size());
   if (check) {
     std::string list;
     for (const auto& i : ignored) list += (list.empty() ? "" : ", ") + i;
@@ -312,6 +317,18 @@ int Main(int argc, char** argv) {
   for (const auto& d : damage) std::cout << "DAMAGED " << d << "\n";
   for (const auto& [module, errors] : replayer.node_errors())
     if (errors > 0) std::cout << "note: " << module << " counted " << errors << " errors (rejected inputs, failed computations)\n";
+  // A module that started late says what its build changed only when it starts.
+  for (size_t i = 0; i < replayer.modules().size(); ++i)
+    for (size_t k = notes_printed[i]; k < replayer.modules()[i].notes.size(); ++k)
+      std::cerr << "replay: " << replayer.modules()[i].name << ": " << replayer.modules()[i].notes[k] << "\n";
+  // Outputs stamped at a tick pair only on a log whose ticks the replay repeats (README): say so
+  // rather than pass a check that compared nothing.
+  if (check)
+    for (const auto& [ch, n] : recorded_on)
+      if (n > 0 && checker.counts().compared_by_channel.count(ch) == 0)
+        std::cout << "note: none of the " << n << " recorded outputs on " << ch
+                  << " paired with a replayed one (outputs stamped at a loop tick, as projection's and calibrate's, "
+                     "pair only on a log whose ticks the replay repeats: one recorded on the rig)\n";
   if (!check) {
     std::cout << outputs_seen << " outputs replayed (" << replayer.events() << " log events)" << std::endl;
     return damage.empty() ? 0 : 3;
