@@ -133,8 +133,16 @@ Replayer::Replayer(std::vector<std::string> sources, ReplayOptions options, Sink
     nodes_.emplace_back();
     for (const auto& c : adapters[i]->compared) compared_.push_back(c);
   }
-  // Nodes up at the range's start are built now, so a bad configuration is an error before anything runs.
-  start_due(start);
+  // Nodes up at the range's start are built now, so a bad configuration is an error before anything
+  // runs (and the scratch folder goes with the replay that failed to start).
+  try {
+    start_due(start);
+  } catch (...) {
+    nodes_.clear();
+    std::error_code ec;
+    std::filesystem::remove_all(context_.scratch_dir, ec);
+    throw;
+  }
   hub_->set_tap([this](const std::string& endpoint, const std::string& ch, const uint8_t* data, size_t size, int64_t utime) {
     if (endpoint == "log") return;
     sink_(false, ch, std::vector<uint8_t>(data, data + size), utime);
