@@ -165,6 +165,60 @@ LineEvidence read_line(const cv::Mat& green, const BoardFrame& board, int row, d
   return e;
 }
 
+// The detector's centroid rule (above 30% of the peak, weighed by depth minus that floor) is not exact on a
+// sampled line: how far it lands from the line's true centre depends on where the line falls within its
+// pixels. For a line of printed width `print_px` blurred to `width_px` at half depth (Gaussian blur, each
+// pixel integrating its area as a sensor does), the largest such error over the sub-pixel phases, and over
+// blurs a little either side of the one the width implies (the error swings with the blur, and the width is
+// measured on sampled dips). `resampled`: the detector reads a rectified frame interpolated (bilinear) from
+// the camera's pixels at another phase, which moves the thresholded centroid again. Sharp lines are the worst
+// (3 px lines at 1280x720: an eighth of a pixel); a blur of a pixel or more smooths it away. The same in every
+// row and every frame of a still block, so neither the scatter nor the temporal spread sees it.
+double phase_bias(double print_px, double width_px, bool resampled) {
+  const double p = std::clamp(print_px, 0.5, 40.0);
+  const double sigma0 = std::sqrt(std::max(0.0, width_px * width_px - p * p)) / 2.355;
+  constexpr int kPhases = 16, kSub = 16;
+  const int resample_phases = resampled ? 8 : 1;
+  double worst = 0;
+  auto centroid_error = [&](const std::vector<double>& d, int half, double centre) {
+    const double peak = *std::max_element(d.begin(), d.end());
+    double sw = 0, sx = 0;
+    for (int k = -half; k <= half; ++k) {
+      const double w = d[static_cast<size_t>(k + half)] - kCentroidFloor * peak;
+      if (w > 0) sw += w, sx += w * k;
+    }
+    if (sw > 0) worst = std::max(worst, std::abs(sx / sw - centre));
+  };
+  for (double f : {0.6, 0.8, 1.0, 1.2}) {
+    const double sigma = f * sigma0;
+    const int half = static_cast<int>(std::ceil(0.5 * p + 3 * sigma)) + 2;
+    std::vector<double> d(static_cast<size_t>(2 * half + 1)), r(d.size());
+    for (int ph = 0; ph < kPhases; ++ph) {
+      const double c = static_cast<double>(ph) / kPhases;
+      for (int k = -half; k <= half; ++k) {
+        double sum = 0;
+        for (int j = 0; j < kSub; ++j) {
+          const double x = k - 0.5 + (j + 0.5) / kSub - c;
+          sum += sigma > 1e-3 ? 0.5 * (std::erf((x + 0.5 * p) / (sigma * M_SQRT2)) - std::erf((x - 0.5 * p) / (sigma * M_SQRT2)))
+                              : (std::abs(x) < 0.5 * p ? 1.0 : 0.0);
+        }
+        d[static_cast<size_t>(k + half)] = sum / kSub;
+      }
+      for (int q = 0; q < resample_phases; ++q) {
+        if (q == 0) {
+          centroid_error(d, half, c);
+          continue;
+        }
+        // Rectified pixel k read at camera position k + g.
+        const double g = static_cast<double>(q) / resample_phases;
+        for (size_t k = 0; k < d.size(); ++k) r[k] = (1 - g) * d[k] + g * (k + 1 < d.size() ? d[k + 1] : 0.0);
+        centroid_error(r, half, c - g);
+      }
+    }
+  }
+  return worst;
+}
+
 double student_t95(int dof) {
   // Two-sided 95% quantiles of Student's t.
   static const double t[] = {0, 12.71, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
@@ -239,7 +293,8 @@ std::vector<BlockEvidence> measure_evidence(const cv::Mat& frame, const BoardFra
     std::nth_element(widths.begin(), widths.begin() + static_cast<std::ptrdiff_t>(widths.size() / 2), widths.end());
     frame_width = widths[widths.size() / 2];
   }
-  for (BlockEvidence& e : out) e.frame_width_px = frame_width;
+  const double phase = phase_bias(line_width, frame_width, !board.identity());
+  for (BlockEvidence& e : out) e.frame_width_px = frame_width, e.phase_px = phase;
   return out;
 }
 
@@ -271,7 +326,11 @@ double frame_uncertainty(const BlockEvidence& e, double block_length_px, const U
   // centroid, the more the closer it comes; half of it per line, as for the pair.
   auto crowding = [&](const LineEvidence& l) { return std::max(0.0, 2.0 * e.frame_width_px - l.neighbour_px); };
   const double crowd_px = 0.5 * (crowding(e.left) + crowding(e.right));
-  const double px = m.coverage_factor * random_px + m.sampling_px + m.blur_factor * blur_px +
+  // Sampling: the centroid's pixel-phase error of lines this sharp and this wide (phase_bias), at least the
+  // JPEG floor; both lines of a block can share their phase (a block a whole number of pixels long), so the
+  // midpoint's error is as large as one line's.
+  const double sampling = std::max(m.sampling_px, m.phase_factor * e.phase_px);
+  const double px = m.coverage_factor * random_px + sampling + m.blur_factor * blur_px +
                     m.pair_factor * 0.5 * e.pair_residual_px + m.crowding_factor * crowd_px;
   return px / block_length_px;
 }

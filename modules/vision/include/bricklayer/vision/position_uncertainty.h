@@ -10,7 +10,9 @@
 //   - blur: the line's width at half depth beyond its printed width, and how close another block's line comes
 //     within the reach of its blur (biases no row or frame shows: see frame_uncertainty);
 //   - the pair: how far the two lines are from the spacing one block implies (a line moved by e moves the
-//     midpoint by e/2, and nothing else in the frame says so).
+//     midpoint by e/2, and nothing else in the frame says so);
+//   - sampling: where a line falls within its pixels moves the detector's centroid of it, most for sharp lines
+//     (a bound computed from the frame's printed line width and blur), never less than JPEG's floor.
 // The temporal filter adds the spread of the block's x over its recent frames (temporal_filter.h), and how far
 // the published x lags the latest measurement. The result is never below the calibration's residual
 // (calibration_t.reprojection_error_mean_px carried to board x through the calibration's own mappings) nor the
@@ -49,6 +51,9 @@ struct BlockEvidence {
   double pair_residual_px = 0.0;  // |line spacing - the spacing this pair's kind implies|
   double line_width_px = 0.0;     // the frame's printed line width as the detector measures it (lone pairs' shortfall)
   double frame_width_px = 0.0;    // the frame's median line width at half depth (print and blur): how far a dip reaches
+  // The largest error the detector's centroid makes on a line of the frame's printed width and blur from where
+  // the line falls within its pixels (pixels; see frame_uncertainty).
+  double phase_px = 0.0;
 };
 
 // Reads the evidence for each block of one detection. `frame` is the camera frame (BGR8 or GRAY8) the
@@ -68,6 +73,8 @@ struct UncertaintyModel {
   double pair_factor = 0.25;
   // Pixels: the sampling floor of a line centre (pixel phase, JPEG quantisation), the same in every row and frame.
   double sampling_px = 0.02;
+  // Multiplies the pixel-phase bound (BlockEvidence::phase_px): 1, a bound, not fitted.
+  double phase_factor = 1.0;
   // Pixels of half-width per pixel the lines are wider (at half depth) than the frame's printed line width.
   double blur_factor = 0.01;
   // Pixels of half-width per pixel a neighbouring line comes closer than two line widths (at half depth).
