@@ -1,11 +1,14 @@
 #include "bricklayer/frames/image_codec.h"
 
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "bricklayer/frames/decode_ahead.h"
 
 #ifdef BRICKLAYER_HAVE_TURBOJPEG
 #include <turbojpeg.h>
@@ -91,6 +94,12 @@ void set_error(std::string* error, std::string text) {
 }  // namespace
 
 cv::Mat decode_image(const image_t& image, std::string* error) {
+  if (DecodeAhead* ahead = DecodeAhead::installed())
+    if (std::optional<cv::Mat> decoded = ahead->take(image, error)) return *decoded;
+  return decode_image_here(image, error);
+}
+
+cv::Mat decode_image_here(const image_t& image, std::string* error) {
   const std::string what = "frame " + std::to_string(image.frame_number) + ": ";
   if (image.width <= 0 || image.height <= 0 || image.width > kMaxFrameSide || image.height > kMaxFrameSide) {
     set_error(error, what + "width/height " + std::to_string(image.width) + "x" + std::to_string(image.height) +

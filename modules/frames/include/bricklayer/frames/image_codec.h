@@ -19,7 +19,11 @@ inline constexpr int kMaxFrameSide = 8192;
 // oversized width/height, size not matching data or width*height(*3), undecodable or truncated
 // JPEG/PNG, a JPEG/PNG header that declares another size than the message (checked before decoding,
 // so a small file declaring a huge image allocates nothing), decoded size different from width x height.
+// A replay's DecodeAhead (decode_ahead.h) may have decoded it already on another thread: the same
+// bytes through decode_image_here, so the same result.
 cv::Mat decode_image(const image_t& image, std::string* error);
+// The same, always on the caller's thread.
+cv::Mat decode_image_here(const image_t& image, std::string* error);
 
 // Encodes a BGR8 or GRAY8 frame as image_t: FORMAT_JPEG (at jpeg_quality), FORMAT_PNG (OpenCV's
 // default settings) or raw FORMAT_GRAY8 / FORMAT_BGR8. Throws std::invalid_argument for an empty,
