@@ -171,7 +171,6 @@ TEST_CASE("a study session under red: the projector shows the whole falling pile
   rig.step();
   CHECK(projector.instruction().find("Say done") != std::string::npos);
   // The pile to build is outlined where the problem file puts its blocks; nothing is built yet.
-  CHECK(std::string(projection::kStudyProblemChannel) == study::kProblemChannel);
   const study::Problem problem_1 = study::load_problem(session_config("red").problem_1);
   check_outlined(projector, problem_1.pile);
   SDL_Event e{};

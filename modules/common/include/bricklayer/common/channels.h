@@ -26,6 +26,7 @@ inline constexpr const char* kConfigChannel = "BL_CONFIG";          // node_conf
 // The study session's (modules/study) that a stage reads or writes: projection shows the session's
 // instruction and sends the subject's "done". The other study channels are in bricklayer/study/channels.h.
 inline constexpr const char* kStudySessionChannel = "BL_STUDY_SESSION";  // study_session_t, session driver
+inline constexpr const char* kStudyProblemChannel = "BL_STUDY_PROBLEM";  // study_problem_t, session driver -> projection
 inline constexpr const char* kStudyCommandChannel = "BL_STUDY_COMMAND";  // study_command_t, experimenter/projection -> driver
 
 // The channel name with the deployment's prefix (environment BRICKLAYER_CHANNEL_PREFIX, default none).

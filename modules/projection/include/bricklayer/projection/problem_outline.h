@@ -21,11 +21,6 @@
 
 namespace bricklayer::projection {
 
-// The study driver's problem channel. A stage never includes modules/study's headers, and
-// common/channels.h (where the session's two channels live) is included by most of the tree, so the name is
-// declared here; test_study_projection checks it equals bricklayer::study::kProblemChannel.
-inline constexpr const char* kStudyProblemChannel = "BL_STUDY_PROBLEM";
-
 // One block of a stabilise problem's pile: board block lengths, left end x from the surface edge, row 0 on
 // the surface (its bottom at row * block height, the drawn stack's height).
 struct ProblemBlock {
