@@ -70,7 +70,7 @@ TEST_CASE("a frame not offered, skipped or forgotten is decoded on the caller's 
   frames::DecodeAhead::install(nullptr);
 }
 
-TEST_CASE("a broken frame offered ahead gives the same error as decoded here; destroyed, it uninstalls itself") {
+TEST_CASE("a broken frame offered ahead gives the same error as decoded here, and destroyed it uninstalls itself") {
   image_t broken = frame(1);
   broken.data.resize(broken.data.size() / 2);
   broken.size = static_cast<int32_t>(broken.data.size());

@@ -6,6 +6,7 @@
 // Exit code: 0 when every compared output matches (and, for --diff, A and B agree); 1 on any mismatch
 // (or difference); 3 when the log is damaged or incomplete (torn or truncated stretches, parts gone,
 // events the logger could not keep), even with 0 mismatches; 2 on bad usage.
+#include <malloc.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -353,4 +354,13 @@ int Main(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return bricklayer::run_main("bricklayer-replay", &Main, argc, argv); }
+int main(int argc, char** argv) {
+#ifdef __GLIBC__
+  // A replay allocates and frees a decoded frame (about 1 MB) thirty times a second of log, on two threads
+  // (frames/decode_ahead.h). glibc would hand each back to the kernel (mmap / munmap) and fault it in
+  // again: 10% of a vision replay's time. Kept on the heap instead (a replay's memory is a few frames).
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);
+  mallopt(M_TRIM_THRESHOLD, 256 << 20);
+#endif
+  return bricklayer::run_main("bricklayer-replay", &Main, argc, argv);
+}

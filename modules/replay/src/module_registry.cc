@@ -84,6 +84,7 @@ AdapterOptions<calibration::CalibrateConfig> calibrate_options() {
   };
   // --serve republishes on a timer; a calibration run sends a pattern on the tick a frame arrived.
   o.ticks_at_outputs = true;
+  o.decodes_frames = true;
   o.replay_settings = [](calibration::CalibrateConfig& c, const BuildContext& context) {
     std::vector<std::string> notes;
     const std::string live = c.output;
@@ -112,7 +113,9 @@ AdapterOptions<calibration::CalibrateConfig> calibrate_options() {
 const std::vector<ModuleAdapter>& replayable_modules() {
   static const std::vector<ModuleAdapter> modules = [] {
     std::vector<ModuleAdapter> m;
-    m.push_back(node_adapter<vision::VisionNode>("vision", {channel(kStackChannel)}));
+    AdapterOptions<vision::VisionConfig> vision;
+    vision.decodes_frames = true;
+    m.push_back(node_adapter<vision::VisionNode>("vision", {channel(kStackChannel)}, vision));
     m.push_back(node_adapter<prediction::PredictionNode>("prediction", {channel(kPredictionChannel)}));
     m.push_back(node_adapter<planner::PlannerNode>("planner", {channel(kPreviewChannel), channel(kHintChannel)}));
 #ifdef BRICKLAYER_REPLAY_PROJECTION

@@ -9,6 +9,8 @@
 
 #include "bricklayer/common/channels.h"
 #include "bricklayer/heartbeat_t.hpp"
+#include "bricklayer/image_t.hpp"
+#include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/node_config_t.hpp"
 #include "bricklayer/replay/module_registry.h"
 #include "bricklayer/runtime/codec.h"
@@ -116,6 +118,10 @@ Replayer::Replayer(std::vector<std::string> sources, ReplayOptions options, Sink
   player_ = &hub_->endpoint("log");
   adapters_ = adapters;
   sets_ = sets;
+  if (std::any_of(adapters_.begin(), adapters_.end(), [](const ModuleAdapter* a) { return a->decodes_frames; })) {
+    decode_ahead_ = std::make_unique<frames::DecodeAhead>();
+    frames::DecodeAhead::install(decode_ahead_.get());
+  }
   for (size_t i = 0; i < adapters.size(); ++i) {
     ReplayedModule m;
     m.name = adapters[i]->name;
@@ -236,21 +242,33 @@ bool Replayer::advance() {
 }
 
 bool Replayer::read(runtime::LogEvent& e) {
-  if (peeked_) {
-    e = std::move(*peeked_);
-    peeked_.reset();
-    return true;
-  }
-  return reader_->next(e);
+  fill();
+  if (ahead_.empty()) return false;
+  e = std::move(ahead_.front());
+  ahead_.pop_front();
+  return true;
 }
 
 runtime::LogEvent* Replayer::peek() {
-  if (!peeked_) {
+  fill();
+  return ahead_.empty() ? nullptr : &ahead_.front();
+}
+
+void Replayer::fill() {
+  // About eight camera frames ahead at the demo's mix of channels (seven other events a frame).
+  constexpr size_t kReadAhead = 64;
+  while (ahead_.size() < kReadAhead) {
     runtime::LogEvent e;
-    if (!reader_->next(e)) return nullptr;
-    peeked_ = std::move(e);
+    if (!reader_->next(e)) return;
+    if (decode_ahead_) {
+      if (e.channel == frame_channel_) {
+        if (auto image = runtime::decode<image_t>(e.data)) decode_ahead_->offer(std::move(*image));
+      } else if (e.channel == projector_channel_) {
+        if (auto state = runtime::decode<projector_state_t>(e.data)) decode_ahead_->offer(std::move(state->image));
+      }
+    }
+    ahead_.push_back(std::move(e));
   }
-  return &*peeked_;
 }
 
 void Replayer::run(const std::function<void(int64_t, int64_t, int64_t)>& progress) {

@@ -45,6 +45,9 @@ struct ModuleAdapter {
   // they answer: the replay ticks it at the time of each of its recorded outputs as well, so a tick
   // the live node published on is a tick of the replay too.
   bool ticks_at_outputs = false;
+  // It decodes camera frames (BL_IMAGE) and projector images (BL_PROJECTOR): the replay then decodes
+  // them ahead on a second thread (frames/decode_ahead.h).
+  bool decodes_frames = false;
   // recorded_json: the node_config_t.config_json recorded ("" = none: the defaults). sets: "name=value".
   // Throws std::invalid_argument for an override that names no field or breaks its rule.
   std::function<BuiltNode(const std::string& recorded_json, const std::vector<std::string>& sets, runtime::Bus& bus,
@@ -65,6 +68,7 @@ struct AdapterOptions {
   std::function<bool(const std::string&, const std::vector<uint8_t>&)> owns;
   std::vector<std::string> ignored;
   bool ticks_at_outputs = false;
+  bool decodes_frames = false;
   // Settings a replay must force (no screen, no sound, no live files): applied after the recorded
   // configuration and --set; returns the notes that say what was changed.
   std::function<std::vector<std::string>(Config&, const BuildContext&)> replay_settings;
@@ -80,6 +84,7 @@ ModuleAdapter node_adapter(std::string name, std::vector<std::string> compared,
   a.owns = options.owns;
   a.ignored = options.ignored;
   a.ticks_at_outputs = options.ticks_at_outputs;
+  a.decodes_frames = options.decodes_frames;
   a.build = [replay_settings = options.replay_settings](const std::string& recorded, const std::vector<std::string>& sets,
                                                         runtime::Bus& bus, const BuildContext& context) {
     typename NodeType::Config config;

@@ -8,12 +8,15 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "bricklayer/common/channels.h"
+#include "bricklayer/frames/decode_ahead.h"
 #include "bricklayer/replay/module_adapter.h"
 #include "bricklayer/replay/recording.h"
 #include "bricklayer/runtime/in_process_bus.h"
@@ -93,6 +96,8 @@ class Replayer {
   // The next event of the range (the one peeked at first, if any); the next one without taking it.
   bool read(runtime::LogEvent& e);
   runtime::LogEvent* peek();
+  // Reads until kReadAhead events are ahead (or the log ends).
+  void fill();
   // Builds the nodes whose start has come (a node that started late live misses what came before, as
   // the live one did: the projector image it never saw, the frames before it listened).
   void start_due(int64_t utime);
@@ -102,7 +107,11 @@ class Replayer {
   Sink sink_;
   std::function<void(const runtime::LogEvent&)> observer_;
   std::unique_ptr<RecordingReader> reader_;
-  std::optional<runtime::LogEvent> peeked_;
+  // Events read ahead of the one delivered (peek() looks at the next; the frames among them are offered
+  // to decode_ahead_ so they decode on the second core while the nodes work).
+  std::deque<runtime::LogEvent> ahead_;
+  std::unique_ptr<frames::DecodeAhead> decode_ahead_;  // when a replayed module decodes frames
+  const std::string frame_channel_ = channel(kImageChannel), projector_channel_ = channel(kProjectorChannel);
   std::unique_ptr<runtime::InProcessBus> hub_;
   runtime::Bus* player_ = nullptr;
   std::vector<std::unique_ptr<runtime::Node>> nodes_;  // null until the module's start
