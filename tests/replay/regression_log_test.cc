@@ -9,24 +9,18 @@
 #include <regex>
 
 #include "harness/program.h"
+#include "replay_cli.h"
 #include "harness/scratch.h"
 
 using namespace bricklayer;
+using namespace bricklayer::test;
 namespace fs = std::filesystem;
 
 namespace {
 const std::string kLog = std::string(BRICKLAYER_SOURCE_DIR) + "/tests/data/replay/regression.lcm";
 const std::string kModules = "vision,prediction,planner,projection";
 
-harness::Ran replay(std::vector<std::string> args) {
-  args.push_back("--no-progress");
-  return harness::run_program("bricklayer-replay", std::move(args), std::chrono::seconds(120));
-}
 
-int64_t compared_on(const std::string& out, const std::string& ch) {
-  std::smatch m;
-  return std::regex_search(out, m, std::regex("compared per channel:.* " + ch + R"( (\d+))")) ? std::stoll(m[1]) : 0;
-}
 }  // namespace
 
 TEST_CASE("the regression log replays with 0 mismatches in every module") {

@@ -15,23 +15,17 @@
 #include "bricklayer/runtime/codec.h"
 #include "bricklayer/runtime/log_file.h"
 #include "harness/program.h"
+#include "replay_cli.h"
 #include "harness/scratch.h"
 #include "rig_runs.h"
 
 using namespace bricklayer;
+using namespace bricklayer::test;
 namespace fs = std::filesystem;
 
 namespace {
 
-harness::Ran replay(std::vector<std::string> args) {
-  args.push_back("--no-progress");
-  return harness::run_program("bricklayer-replay", std::move(args), std::chrono::seconds(120));
-}
 
-int64_t compared_on(const std::string& out, const std::string& ch) {
-  std::smatch m;
-  return std::regex_search(out, m, std::regex("compared per channel:.* " + ch + R"( (\d+))")) ? std::stoll(m[1]) : 0;
-}
 
 struct Runs {
   harness::ScratchDir dir{"replay-calibrate"};
@@ -52,19 +46,6 @@ const Runs& runs() {
   return r;
 }
 
-std::string tampered(const harness::ScratchDir& dir, const std::string& from, const std::function<bool(runtime::LogEvent&)>& fn) {
-  const std::string out = (dir / "tampered.lcm").string();
-  runtime::LogReader r(from);
-  runtime::LogWriter w(out);
-  runtime::LogEvent e;
-  bool done = false;
-  while (r.next(e)) {
-    if (!done) done = fn(e);
-    REQUIRE(w.write(e.utime, e.channel, e.data.data(), e.data.size()));
-  }
-  REQUIRE(done);
-  return out;
-}
 
 }  // namespace
 

@@ -14,18 +14,16 @@
 #include "bricklayer/runtime/codec.h"
 #include "bricklayer/runtime/log_file.h"
 #include "harness/program.h"
+#include "replay_cli.h"
 #include "harness/scratch.h"
 #include "replay_fixture.h"
 
 using namespace bricklayer;
+using namespace bricklayer::test;
 namespace fs = std::filesystem;
 
 namespace {
 
-harness::Ran replay(std::vector<std::string> args) {
-  args.push_back("--no-progress");
-  return harness::run_program("bricklayer-replay", std::move(args), std::chrono::seconds(60));
-}
 
 int64_t compared(const std::string& out) {
   std::smatch m;

@@ -14,28 +14,17 @@
 #include "bricklayer/runtime/codec.h"
 #include "bricklayer/runtime/log_file.h"
 #include "harness/program.h"
+#include "replay_cli.h"
 #include "harness/scratch.h"
 #include "rig_runs.h"
 
 using namespace bricklayer;
+using namespace bricklayer::test;
 
 namespace {
 
-harness::Ran replay(std::vector<std::string> args) {
-  args.push_back("--no-progress");
-  return harness::run_program("bricklayer-replay", std::move(args), std::chrono::seconds(120));
-}
 
-int64_t compared_ok(const std::string& out) {
-  std::smatch m;
-  return std::regex_search(out, m, std::regex(R"((\d+) compared, 0 mismatches)")) ? std::stoll(m[1]) : -1;
-}
 
-// "compared per channel: BL_PROJECTOR 80 BL_ROUND 12 ..." -> the count for one channel.
-int64_t compared_on(const std::string& out, const std::string& ch) {
-  std::smatch m;
-  return std::regex_search(out, m, std::regex("compared per channel:.* " + ch + R"( (\d+))")) ? std::stoll(m[1]) : 0;
-}
 
 const std::string& projection_log() {
   static harness::ScratchDir dir("replay-projection");
@@ -47,20 +36,6 @@ const std::string& projection_log() {
   return log;
 }
 
-// A copy of the log with fn applied to the events it accepts until it returns true once.
-std::string tampered(const harness::ScratchDir& dir, const std::function<bool(runtime::LogEvent&)>& fn) {
-  const std::string out = (dir / "tampered.lcm").string();
-  runtime::LogReader r(projection_log());
-  runtime::LogWriter w(out);
-  runtime::LogEvent e;
-  bool done = false;
-  while (r.next(e)) {
-    if (!done) done = fn(e);
-    REQUIRE(w.write(e.utime, e.channel, e.data.data(), e.data.size()));
-  }
-  REQUIRE(done);
-  return out;
-}
 
 }  // namespace
 
@@ -83,7 +58,7 @@ TEST_CASE("a tampered round_t, projector state and picture are caught and named"
   harness::ScratchDir dir("replay-projection-tamper");
   SECTION("round_t") {
     int64_t utime = 0;
-    const std::string log = tampered(dir, [&](runtime::LogEvent& e) {
+    const std::string log = tampered(dir, projection_log(), [&](runtime::LogEvent& e) {
       if (e.channel != channel(kRoundChannel)) return false;
       auto r = runtime::decode<round_t>(e.data);
       if (r->state != round_t::STATE_RUNNING || r->score == 0) return false;
@@ -100,7 +75,7 @@ TEST_CASE("a tampered round_t, projector state and picture are caught and named"
     CHECK(r.out.find(" compared, 1 mismatches") != std::string::npos);
   }
   SECTION("projector_state_t") {
-    const std::string log = tampered(dir, [&](runtime::LogEvent& e) {
+    const std::string log = tampered(dir, projection_log(), [&](runtime::LogEvent& e) {
       if (e.channel != channel(kProjectorChannel)) return false;
       auto s = runtime::decode<projector_state_t>(e.data);
       if (s->frame_number < 100) return false;
@@ -115,7 +90,7 @@ TEST_CASE("a tampered round_t, projector state and picture are caught and named"
     CHECK(r.out.find("command_sequence: 12345 (log) vs ") != std::string::npos);
   }
   SECTION("the picture in a projector state: compared decoded, pixel for pixel") {
-    const std::string log = tampered(dir, [&](runtime::LogEvent& e) {
+    const std::string log = tampered(dir, projection_log(), [&](runtime::LogEvent& e) {
       if (e.channel != channel(kProjectorChannel)) return false;
       auto s = runtime::decode<projector_state_t>(e.data);
       if (s->frame_number < 100) return false;

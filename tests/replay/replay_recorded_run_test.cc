@@ -17,39 +17,19 @@
 #include "bricklayer/runtime/lcm_bus.h"
 #include "bricklayer/runtime/log_file.h"
 #include "harness/program.h"
+#include "replay_cli.h"
 #include "harness/recorder.h"
 #include "harness/scratch.h"
 
 using namespace bricklayer;
+using namespace bricklayer::test;
 using namespace std::chrono_literals;
 
 namespace {
 const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
-harness::Ran replay(std::vector<std::string> args) {
-  args.push_back("--no-progress");
-  return harness::run_program("bricklayer-replay", std::move(args), 60s);
-}
 
-int64_t compared_ok(const std::string& out) {
-  std::smatch m;
-  return std::regex_search(out, m, std::regex(R"((\d+) compared, 0 mismatches)")) ? std::stoll(m[1]) : -1;
-}
 
-// A copy of the part with fn applied to the first event it accepts.
-std::string tampered(const harness::ScratchDir& dir, const std::string& part, const std::function<bool(runtime::LogEvent&)>& fn) {
-  const std::string out = (dir / "tampered.00").string();
-  runtime::LogReader r(part);
-  runtime::LogWriter w(out);
-  runtime::LogEvent e;
-  bool done = false;
-  while (r.next(e)) {
-    if (!done) done = fn(e);
-    w.write(e.utime, e.channel, e.data.data(), e.data.size());
-  }
-  REQUIRE(done);
-  return out;
-}
 }  // namespace
 
 TEST_CASE("a run of the real prediction and planner processes replays with 0 mismatches, and tampering is caught and named") {
@@ -105,7 +85,7 @@ TEST_CASE("a run of the real prediction and planner processes replays with 0 mis
     frame = p->frame_number;
     e.data = runtime::encode(*p);
     return true;
-  });
+  }, "tampered.00");
   auto r = replay({bad_prediction, "--module", "prediction,planner", "--check"});
   INFO(r.out << r.err);
   CHECK(r.status.code == 1);
@@ -119,7 +99,7 @@ TEST_CASE("a run of the real prediction and planner processes replays with 0 mis
     p->poses[2] += 0.25;
     e.data = runtime::encode(*p);
     return true;
-  });
+  }, "tampered.00");
   r = replay({bad_preview, "--module", "prediction,planner", "--check"});
   INFO(r.out << r.err);
   CHECK(r.status.code == 1);

@@ -11,18 +11,16 @@
 #include "bricklayer/runtime/log_file.h"
 #include "bricklayer/stack_t.hpp"
 #include "harness/program.h"
+#include "replay_cli.h"
 #include "harness/scratch.h"
 #include "replay_fixture.h"
 
 using namespace bricklayer;
+using namespace bricklayer::test;
 
 namespace {
 const std::string kScenario = std::string(BRICKLAYER_SOURCE_DIR) + "/launch/scenarios/build-4-optimum.json";
 
-harness::Ran replay(std::vector<std::string> args) {
-  args.push_back("--no-progress");
-  return harness::run_program("bricklayer-replay", std::move(args), std::chrono::seconds(120));
-}
 
 int64_t compared(const std::string& out) {
   std::smatch m;

@@ -143,7 +143,7 @@ TEST_CASE("the status page in Chromium: no console errors, the modules' states, 
   harness::Program launch("bricklayer-launch",
                           {"--root", dir.str(), "--bin-dir", std::string(BRICKLAYER_BINARY_DIR) + "/bin", "--lcm-url", kUrl,
                            (dir / "camera.json").string(), "--host-name", "camera-host"},
-                          {{"DISPLAY="}});
+                          harness::ProgramOptions{{"DISPLAY="}, ""});
   const int pid = prediction_pid_when_up(20s);
   INFO("status: " << status.stderr_text() << "\nlaunch: " << launch.stderr_text());
   REQUIRE(pid > 0);
