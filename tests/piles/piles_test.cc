@@ -12,6 +12,7 @@
 #include "bricklayer/piles/pile_in_view.h"
 #include "bricklayer/piles/player_pile.h"
 #include "bricklayer/piles/random_pile.h"
+#include "bricklayer/piles/walls.h"
 
 using namespace bricklayer;
 
@@ -62,8 +63,8 @@ piles::PileOptions tight_rows() {
 }  // namespace
 
 TEST_CASE("every generator gives the piles it gave before it moved into the piles library") {
-  // Digests taken from core/generate.h, simcam/piles.h, tests/core/piles.h and reliability/frames.h
-  // before the move.
+  // Digests taken from core/generate.h, simcam/piles.h, tests/core/piles.h, reliability/frames.h and
+  // planner/piles.h before the move.
   const Pinned pinned[] = {
       {"harmonic_stack(5)", piles::harmonic_stack(5), 5, 0xa04352afe9f31df2ull, 0.14166666666666661},
       {"harmonic_stack(12, 0.25)", piles::harmonic_stack(12, 0.25), 12, 0x9dfb97fc70b4b5a1ull, 0.55160533910533904},
@@ -76,6 +77,11 @@ TEST_CASE("every generator gives the piles it gave before it moved into the pile
       {"pile_in_view(60, 1000)", piles::pile_in_view(60, 1000), 60, 0xe94bcabacafd65e8ull, 1.325871004732498},
       {"pile_in_view(200, 1003)", piles::pile_in_view(200, 1003), 200, 0x46236fc401f328b2ull, 4.8343960498409073},
       {"figure15_both()", piles::figure15_both(), 3, 0x1e0c0044383e2e56ull, 0.20000000000000001},
+      {"wall_pile(3, 2, 7)", piles::wall_pile(3, 2, 7), 6, 0x7e56b5a1705c61caull, -2.0988531612317454},
+      {"wall_pile(12, 5, 42, 0.3)", piles::wall_pile(12, 5, 42, 0.3), 60, 0xb947469cc83c8f42ull, -5.2690275579741455},
+      {"toppling_pile(12, 5, 4, 1.33, 17)", piles::toppling_pile(12, 5, 4, 1.33, 17), 60, 0xed7284a59e6b0782ull, -4.3149243857149431},
+      {"stairs_pile(6, 10, 0.44, 23)", piles::stairs_pile(6, 10, 0.44, 23), 60, 0x28bdfb70629e12ebull, -7.9564706771320086},
+      {"tower_pile(60, 33, 0.6, 9)", piles::tower_pile(60, 33, 0.6, 9), 60, 0x8a0e8ec7f6ceae80ull, -0.27077916603602326},
   };
   for (const Pinned& p : pinned) {
     INFO(p.name);

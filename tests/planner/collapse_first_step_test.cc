@@ -20,7 +20,7 @@
 #include "bricklayer/piles/chaotic_pile.h"
 #include "bricklayer/piles/known.h"
 #include "bricklayer/piles/player_pile.h"
-#include "bricklayer/planner/piles.h"
+#include "bricklayer/piles/walls.h"
 
 using namespace bricklayer;
 
@@ -73,10 +73,10 @@ std::vector<Pile> checked_piles() {
   // The preview benchmark's kinds, smaller and larger.
   for (uint64_t seed = 1; seed <= 60; ++seed) {
     const int rows = 3 + static_cast<int>(seed % 10), per_row = 2 + static_cast<int>(seed % 4);
-    add("wall " + std::to_string(seed), planner::toppling_pile(rows, per_row, 1 + static_cast<int>(seed % 4),
+    add("wall " + std::to_string(seed), piles::toppling_pile(rows, per_row, 1 + static_cast<int>(seed % 4),
                                                                0.5 + 0.02 * static_cast<double>(seed % 50), seed));
-    add("stairs " + std::to_string(seed), planner::stairs_pile(2 + static_cast<int>(seed % 6), 10, 0.42 + 0.002 * static_cast<double>(seed % 40), seed));
-    add("tower " + std::to_string(seed), planner::tower_pile(10 + static_cast<int>(seed % 51), 5 + static_cast<int>(seed % 5),
+    add("stairs " + std::to_string(seed), piles::stairs_pile(2 + static_cast<int>(seed % 6), 10, 0.42 + 0.002 * static_cast<double>(seed % 40), seed));
+    add("tower " + std::to_string(seed), piles::tower_pile(10 + static_cast<int>(seed % 51), 5 + static_cast<int>(seed % 5),
                                                               0.55 + 0.005 * static_cast<double>(seed % 40), seed));
   }
   return out;

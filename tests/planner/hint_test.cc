@@ -8,7 +8,7 @@
 #include <cmath>
 
 #include "bricklayer/core/predict.h"
-#include "bricklayer/planner/piles.h"
+#include "bricklayer/piles/walls.h"
 
 using namespace bricklayer;
 using planner::Hint;
@@ -72,7 +72,7 @@ TEST_CASE("extension hints are safe and never worse than a brute-force grid sear
       pile({{0, -0.75}, {1, -0.25}}),                      // harmonic pair (knife edge)
       pile({{0, -0.6}, {1, -1.0}, {2, -0.8}}),             // a small tower
       pile({{0, -1.5}, {0, -0.5}, {1, -1.0}, {2, -0.9}}),  // a small wall
-      planner::wall_pile(3, 2, 7),
+      piles::wall_pile(3, 2, 7),
   };
   for (const core::Stack& s : piles) {
     INFO("pile of " << s.blocks.size() << " blocks");

@@ -29,7 +29,7 @@
 #include "bricklayer/planner/best_overhang.h"
 #include "bricklayer/planner/collapse.h"
 #include "bricklayer/planner/hint.h"
-#include "bricklayer/planner/piles.h"
+#include "bricklayer/piles/walls.h"
 
 using namespace bricklayer;
 
@@ -175,15 +175,15 @@ int main(int argc, char** argv) {
   int evaluations = 0;
   for (int seed = 1; seed <= piles; ++seed) {
     const auto useed = static_cast<uint64_t>(seed);
-    time_preview(planner::toppling_pile(12, 5, 4, 1.3 + 0.01 * (seed % 40), useed), wall);
-    time_preview(planner::stairs_pile(6, 10, 0.42 + 0.002 * (seed % 40), useed), stairs);
-    time_preview(planner::tower_pile(60, 30 + seed % 10, 0.55 + 0.005 * (seed % 40), useed), tower);
+    time_preview(piles::toppling_pile(12, 5, 4, 1.3 + 0.01 * (seed % 40), useed), wall);
+    time_preview(piles::stairs_pile(6, 10, 0.42 + 0.002 * (seed % 40), useed), stairs);
+    time_preview(piles::tower_pile(60, 30 + seed % 10, 0.55 + 0.005 * (seed % 40), useed), tower);
     if (!hints) continue;
-    const core::Stack balanced = planner::wall_pile(12, 5, useed, 0.3);
+    const core::Stack balanced = piles::wall_pile(12, 5, useed, 0.3);
     planner::Hint hint;
     hint_ms.push_back(time_ms([&] { hint = planner::next_block_hint(balanced); }));
     evaluations += hint.evaluations;
-    const core::Stack tipping = planner::toppling_pile(12, 5, 1, 0.62, useed);
+    const core::Stack tipping = piles::toppling_pile(12, 5, 1, 0.62, useed);
     rebalance_ms.push_back(time_ms([&] { hint = planner::next_block_hint(tipping); }));
   }
   std::printf("bricklayer-bench-planner: 60 blocks, %d piles per kind\n", piles);
