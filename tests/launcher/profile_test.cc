@@ -265,12 +265,17 @@ TEST_CASE("the logger spec: a disk budget, a frame policy, and the command line 
   // Without a budget or frames: as before (rotate 10, every frame).
   const Profile plain = parse_profile(R"({"modules":[],"logger":{"file":"logs/x"}})", "t");
   CHECK(logger_arguments(*plain.logger, "f") == std::vector<std::string>{"--rotate=10", "--split-mb=100", "f"});
-  CHECK(profile_error(R"({"modules":[],"logger":{"budget_mb":100,"split_mb":60}})").find("at most half of 'budget_mb'") !=
+  CHECK(profile_error(R"({"modules":[],"logger":{"budget_mb":100,"split_mb":60}})").find("bricklayer-logger would refuse it: --split-mb must be at most half of --budget-mb") !=
         std::string::npos);
   CHECK(profile_error(R"({"modules":[],"logger":{"frames":{"rate":2,"window":3}}})").find("unknown key 'window'") !=
         std::string::npos);
   CHECK(profile_error(R"({"modules":[],"logger":{"frames":{"rate":0}}})").find("'rate' must be >=") != std::string::npos);
   CHECK(profile_error(R"({"modules":[],"logger":{"frames":5}})").find("'frames' must be an object") != std::string::npos);
+  // Ranges are the logger's own declaration, judged at load.
+  CHECK(profile_error(R"({"modules":[],"logger":{"frames":{"rate":5000}}})").find("bricklayer-logger would refuse it: --frame-rate") !=
+        std::string::npos);
+  CHECK(profile_error(R"({"modules":[],"logger":{"frames":{"rate":2,"after_s":900}}})").find("--full-rate-after-s") !=
+        std::string::npos);
   // Answers thinned with their frames: one more flag; only the two words.
   const Profile with = parse_profile(R"({"modules":[],"logger":{"file":"logs/x","frames":{"rate":2,"answers":"with_frames"}}})", "t");
   const std::vector<std::string> with_args = logger_arguments(*with.logger, "f");

@@ -9,6 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bricklayer/logger/logger_node.h"
+#include "bricklayer/runtime/config.h"
+
 namespace bricklayer::launcher {
 namespace {
 
@@ -99,6 +102,31 @@ int line_of(const std::string& text, const std::string& key) {
   return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
 }
 
+// The logger's own declaration (logger_node.h: each flag's range, and its rules across flags) judges
+// the flags the profile's logger keys become, so a profile is refused at load for exactly what
+// bricklayer-logger would refuse, with the rules written once.
+void check_logger_rules(const LoggerSpec& spec, const std::string& where) {
+  logger::LoggerConfig c;
+  c.file = spec.file;
+  c.rotate = spec.rotate;
+  c.split_mb = spec.split_mb;
+  c.budget_mb = spec.budget_mb;
+  c.min_free_mb = spec.min_free_mb;
+  if (spec.frames) {
+    c.frame_rate = spec.frames->rate;
+    c.full_rate_before_s = spec.frames->before_s;
+    c.full_rate_after_s = spec.frames->after_s;
+    c.answers_with_frames = spec.frames->answers_with_frames;
+  }
+  try {
+    runtime::validate(c);
+    logger::LoggerNode::check(c);
+  } catch (const std::invalid_argument& e) {
+    const std::string why = e.what();
+    throw ProfileError(where + ": bricklayer-logger would refuse it: " + (why.rfind("--", 0) == 0 ? "" : "--") + why);
+  }
+}
+
 }  // namespace
 
 RestartPolicy parse_restart_policy(const std::string& text) {
@@ -157,13 +185,13 @@ Profile parse_profile(const std::string& json_text, const std::string& name) {
     // A budget bounds the series by itself: increment naming (rotation would rename what the index names).
     spec.rotate = static_cast<int>(number(l, "rotate", spec.budget_mb > 0 ? 0 : spec.rotate, lw));
     spec.split_mb = number(l, "split_mb", spec.split_mb, lw, 0.01);
-    if (spec.budget_mb > 0 && 2 * spec.split_mb > spec.budget_mb)
-      throw ProfileError(lw + ": 'split_mb' must be at most half of 'budget_mb' (the file being written is never deleted)");
     if (l.contains("frames") && !l.at("frames").is_null()) {
       const json& f = l.at("frames");
       if (!f.is_object()) throw ProfileError(lw + ": 'frames' must be an object {rate, before_s, after_s, answers}");
       check_keys(f, {"rate", "before_s", "after_s", "answers"}, lw + " frames");
       FrameSpec frames;
+      frames.before_s = logger::LoggerConfig{}.full_rate_before_s;
+      frames.after_s = logger::LoggerConfig{}.full_rate_after_s;
       frames.rate = number(f, "rate", frames.rate, lw + " frames", 0.001);
       frames.before_s = number(f, "before_s", frames.before_s, lw + " frames");
       frames.after_s = number(f, "after_s", frames.after_s, lw + " frames");
@@ -173,10 +201,9 @@ Profile parse_profile(const std::string& json_text, const std::string& name) {
           throw ProfileError(lw + " frames: 'answers' must be \"with_frames\" or \"whole\"");
         frames.answers_with_frames = a == "with_frames";
       }
-      if (frames.rate > 1000 || frames.before_s > 600 || frames.after_s > 600)
-        throw ProfileError(lw + " frames: rate at most 1000 a second, windows at most 600 s");
       spec.frames = frames;
     }
+    check_logger_rules(spec, lw);
     p.logger = spec;
   }
   if (p.modules.empty() && !p.logger) throw ProfileError(where + ": nothing to launch (no modules, no logger)");
