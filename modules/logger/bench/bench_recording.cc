@@ -17,6 +17,7 @@
 #include "bricklayer/common/flags.h"
 #include "bricklayer/common/log.h"
 #include "bricklayer/logger/event_writer.h"
+#include "bricklayer/logger/logger_node.h"
 #include "bricklayer/logger/moment_detector.h"
 #include "bricklayer/logger/recording_policy.h"
 #include "bricklayer/prediction/prediction_node.h"
@@ -124,8 +125,7 @@ int Main(int argc, char** argv) {
   o.before_s = flags.get_double("before");
   o.after_s = flags.get_double("after");
   if (flags.get("answers") == "with_frames") {
-    o.answer_channels = {channel(kStackChannel), channel(kPredictionChannel), channel(kTimingChannel),
-                         channel(kPreviewChannel), channel(kTruthChannel)};
+    o.answer_channels = logger::answer_channels();
   } else if (flags.get("answers") != "whole") {
     throw FlagError("--answers is with_frames or whole");
   }

@@ -53,9 +53,7 @@ FramePolicyOptions frame_policy(const LoggerConfig& c) {
   f.rate = c.frame_rate;
   f.before_s = c.full_rate_before_s;
   f.after_s = c.full_rate_after_s;
-  if (c.answers_with_frames)
-    f.answer_channels = {channel(kStackChannel), channel(kPredictionChannel), channel(kTimingChannel),
-                         channel(kPreviewChannel), channel(kTruthChannel)};
+  if (c.answers_with_frames) f.answer_channels = answer_channels();
   // The delay line shares the unwritten bound: together they never hold more than twice it.
   f.max_held_bytes = static_cast<int64_t>(std::llround(c.max_unwritten_mb * 1024 * 1024));
   return f;
@@ -76,6 +74,11 @@ std::string mb(int64_t bytes) {
 }
 
 }  // namespace
+
+std::vector<std::string> answer_channels() {
+  return {channel(kStackChannel), channel(kPredictionChannel), channel(kTimingChannel), channel(kPreviewChannel),
+          channel(kTruthChannel)};
+}
 
 std::string LoggerConfig::regex_rule(const std::string& pattern) {
   try {

@@ -98,6 +98,10 @@ struct LoggerConfig {
   static std::string regex_rule(const std::string& pattern);
 };
 
+// The channels whose messages answer one camera frame (stacks, predictions, timings, previews, simcam's
+// truth): with --answers-with-frames they are thinned with the frame they answer.
+std::vector<std::string> answer_channels();
+
 class LoggerNode final : public runtime::Node {
  public:
   using Config = LoggerConfig;
