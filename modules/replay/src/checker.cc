@@ -1,6 +1,8 @@
 #include "bricklayer/replay/checker.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 
 #include "bricklayer/common/channels.h"
@@ -57,19 +59,44 @@ Checker::Checker(const MessageDiff& diff, std::ostream& out, int64_t start, size
           [this](const Pair& p) {
             ++counts_.compared;
             ++counts_.compared_by_channel[p.key.channel];
+            const int64_t offset = p.b_stamp_utime - p.key.utime;
+            if (p.nearest) {
+              ++counts_.nearest;
+              ++counts_.nearest_by_channel[p.key.channel];
+              counts_.worst_nearest_offset_us = std::max<int64_t>(counts_.worst_nearest_offset_us, std::llabs(offset));
+            }
             if (p.a == p.b) return;
-            const auto d = diff_.differences(p.a, p.b);
-            if (d.empty()) return;  // only run-to-run fields differ
+            // On a channel stamped at a tick, what depends on when the tick fell is left out of every pair:
+            // a key pair too has its round started at another tick (remaining_ms).
+            const bool tick_stamped = std::find(nearest_channels_.begin(), nearest_channels_.end(), p.key.channel) !=
+                                      nearest_channels_.end();
+            const MessageDiff& compare = tick_stamped && tick_diff_ ? *tick_diff_ : diff_;
+            const auto d = compare.differences(p.a, p.b);
+            if (d.empty()) return;  // only run-to-run (or, paired by nearest time, tick-dependent) fields differ
             ++counts_.mismatches;
             ++counts_.mismatches_by_channel[p.key.channel];
+            char by[96] = "";
+            if (p.nearest)
+              std::snprintf(by, sizeof by, " (paired by nearest time: the replayed one stamped %+.1f ms)",
+                            static_cast<double>(offset) / 1000.0);
             const std::string line = p.key.channel + " (" + diff_.type_of(p.a.data(), p.a.size()) + ") at " +
                                      when(p.key.utime, start_) +
                                      (p.key.frame_number >= 0 ? " frame " + std::to_string(p.key.frame_number) : "") +
-                                     ": " + MessageDiff::describe(d, "log", "replay");
+                                     by + ": " + MessageDiff::describe(d, "log", "replay");
             if (first_.empty()) first_ = line;
             if (counts_.mismatches <= static_cast<int64_t>(max_printed_)) out_ << "MISMATCH " << line << "\n";
           },
-          [this](const MessageKey&, int side) { ++(side == 0 ? counts_.orphans : counts_.not_in_log); }) {}
+          [this](const MessageKey& key, int side) {
+            ++(side == 0 ? counts_.orphans : counts_.not_in_log);
+            if (std::find(nearest_channels_.begin(), nearest_channels_.end(), key.channel) != nearest_channels_.end())
+              ++counts_.tick_unpaired[side];
+          }) {}
+
+void Checker::set_nearest(const std::vector<std::string>& channels, int64_t tolerance_us, const MessageDiff& tick_diff) {
+  tick_diff_ = &tick_diff;
+  nearest_channels_ = channels;
+  matcher_.set_nearest(channels, tolerance_us);
+}
 
 void Checker::recorded(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime) {
   matcher_.add(0, channel, bytes, utime);

@@ -38,6 +38,10 @@ using namespace bricklayer;
 using namespace bricklayer::replay;
 namespace fs = std::filesystem;
 
+// How far apart a recorded and a replayed output stamped at a loop tick may be and still pair: a live
+// node's tick is late by at most its loop's period (projection: 1/60 s) plus the packets' wait.
+constexpr int64_t kNearestToleranceUs = 50'000;
+
 std::vector<std::string> split(const std::string& text, char sep) {
   std::vector<std::string> out;
   std::string item;
@@ -137,6 +141,19 @@ int Main(int argc, char** argv) {
       if (std::find(ignored.begin(), ignored.end(), i) == ignored.end()) ignored.push_back(i);
   for (const auto& i : split(flags.get("ignore"), ',')) ignored.push_back(i);
   const MessageDiff diff(ignored);
+  // Outputs stamped at a loop tick: unpaired by key, they pair by nearest stamp time, compared
+  // without their tick-dependent fields (module_registry.cc lists them per module).
+  std::vector<std::string> nearest_channels, tick_fields;
+  for (const auto& name : options.modules) {
+    const ModuleAdapter& a = module_named(name);
+    if (!a.ticks_at_outputs) continue;
+    nearest_channels.insert(nearest_channels.end(), a.compared.begin(), a.compared.end());
+    for (const auto& f : a.tick_fields)
+      if (std::find(tick_fields.begin(), tick_fields.end(), f) == tick_fields.end()) tick_fields.push_back(f);
+  }
+  std::vector<std::string> tick_ignored = ignored;
+  tick_ignored.insert(tick_ignored.end(), tick_fields.begin(), tick_fields.end());
+  const MessageDiff tick_diff(tick_ignored);
   if (flags.get_bool("update") && (sources.size() != 1 || fs::path(sources[0]).extension() == ".index"))
     throw FlagError("--update rewrites one log file (give exactly one part)");
   if (flags.get_bool("diff") && flags.get("set-b").empty() && flags.get("program-b").empty())
@@ -243,6 +260,7 @@ int Main(int argc, char** argv) {
 
   // --check / --update / --record-outputs: one replay against the log.
   Checker checker(diff, std::cout, log_start, static_cast<size_t>(max_printed));
+  if (!nearest_channels.empty()) checker.set_nearest(nearest_channels, kNearestToleranceUs, tick_diff);
   const bool check = flags.get_bool("check");
   std::unique_ptr<runtime::LogWriter> outputs, updated;
   if (!flags.get("record-outputs").empty()) outputs = std::make_unique<runtime::LogWriter>(flags.get("record-outputs"));
@@ -296,6 +314,14 @@ int Main(int argc, char** argv) {
       for (const auto& ch : compared) c += (c.empty() ? "" : ", ") + ch;
       return c;
     }() << "; never compared (run-to-run): " << list << "\n";
+    if (!nearest_channels.empty()) {
+      std::string chs, fields;
+      for (const auto& ch : nearest_channels) chs += (chs.empty() ? "" : ", ") + ch;
+      for (const auto& f : tick_fields) fields += (fields.empty() ? "" : ", ") + f;
+      std::cerr << "replay: stamped at a loop tick, so paired by nearest stamp time (within "
+                << kNearestToleranceUs / 1000 << " ms) when not by key: " << chs
+                << "; such pairs also leave out (tick-dependent): " << fields << "\n";
+    }
   }
   int64_t since = 0;
   while (replayer.advance())
@@ -322,14 +348,12 @@ int Main(int argc, char** argv) {
   for (size_t i = 0; i < replayer.modules().size(); ++i)
     for (size_t k = notes_printed[i]; k < replayer.modules()[i].notes.size(); ++k)
       std::cerr << "replay: " << replayer.modules()[i].name << ": " << replayer.modules()[i].notes[k] << "\n";
-  // Outputs stamped at a tick pair only on a log whose ticks the replay repeats (README): say so
-  // rather than pass a check that compared nothing.
+  // Say so when a channel paired nothing, rather than pass a check that compared nothing.
   if (check)
     for (const auto& [ch, n] : recorded_on)
       if (n > 0 && checker.counts().compared_by_channel.count(ch) == 0)
         std::cout << "note: none of the " << n << " recorded outputs on " << ch
-                  << " paired with a replayed one (outputs stamped at a loop tick, as projection's and calibrate's, "
-                     "pair only on a log whose ticks the replay repeats: one recorded on the rig)\n";
+                  << " paired with a replayed one, by key or by nearest time\n";
   if (!check) {
     std::cout << outputs_seen << " outputs replayed (" << replayer.events() << " log events)" << std::endl;
     return damage.empty() ? 0 : 3;
@@ -344,6 +368,15 @@ int Main(int argc, char** argv) {
     }
     std::cout << "\n";
   }
+  if (c.nearest > 0) {
+    std::cout << "paired by nearest time:";
+    for (const auto& [ch, n] : c.nearest_by_channel) std::cout << " " << ch << " " << n;
+    std::cout << " (replayed stamps within " << c.worst_nearest_offset_us / 1000.0 << " ms of the recorded ones)\n";
+  }
+  if (c.tick_unpaired[0] + c.tick_unpaired[1] > 0)
+    std::cout << "unpaired by time: " << c.tick_unpaired[0] << " recorded and " << c.tick_unpaired[1]
+              << " replayed outputs stamped at a tick had no output about the same input on the other side within "
+              << kNearestToleranceUs / 1000 << " ms (counted below, not compared)\n";
   std::cout << c.compared << " compared, " << c.mismatches << " mismatches (" << replayer.events() << " log events, "
             << outputs_seen << " outputs replayed, " << c.not_in_log << " not in the log, " << c.orphans
             << " recorded outputs without their input" << (damage.empty() ? "" : "; THE LOG IS DAMAGED OR INCOMPLETE")

@@ -31,6 +31,11 @@ AdapterOptions<projection::ProjectionConfig> projection_options() {
   // round_t, projector_state_t and the status JPEG are stamped with the tick that sent them (a
   // timer: once a second, at most --state-hz, every --status-image-every s).
   o.ticks_at_outputs = true;
+  // Paired by nearest time (a log recorded live on LCM), these depend on when the tick fell: the stamps,
+  // and the round's time left read at the tick. The status JPEG's frame_number counts the pictures sent
+  // on the runtime clock's schedule from the node's start, and is compared.
+  o.tick_fields = {"round_t.utime", "round_t.remaining_ms", "projector_state_t.utime", "projector_state_t.image.utime",
+                   "image_t.utime"};
   o.replay_settings = [](projection::ProjectionConfig& c, const BuildContext&) {
     std::vector<std::string> notes;
     // No screen and no sound in a replay: SDL's offscreen video driver with the software renderer
@@ -84,6 +89,9 @@ AdapterOptions<calibration::CalibrateConfig> calibrate_options() {
   };
   // --serve republishes on a timer; a calibration run sends a pattern on the tick a frame arrived.
   o.ticks_at_outputs = true;
+  // Paired by nearest time (a log recorded live on LCM): the stamps, and the pattern commands' sequence
+  // (the clock at its first command, then counting: next_sequence()).
+  o.tick_fields = {"calibration_t.utime", "command_t.utime", "command_t.sequence"};
   o.decodes_frames = true;
   o.replay_settings = [](calibration::CalibrateConfig& c, const BuildContext& context) {
     std::vector<std::string> notes;

@@ -212,8 +212,24 @@ bool Replayer::advance() {
     first_utime_ = e.utime;
     started_ = true;
   }
-  // Between events the nodes' loops tick, as live (timers, hint requests, heartbeats).
-  for (int64_t t = hub_->now_utime() + kStepUs; t < e.utime; t += kStepUs) {
+  // Between events the nodes' loops tick, as live (timers, hint requests, heartbeats); and at the
+  // stamp of each recorded output of a module that stamps them at its tick, which live (on LCM) is the
+  // node's clock when it published, a little before the logger received it: ticked there, the replayed
+  // node reads the same clock (the round's time left, the animation's phase) on the inputs it had.
+  std::vector<int64_t> ticks;
+  for (int64_t t = hub_->now_utime() + kStepUs; t < e.utime; t += kStepUs) ticks.push_back(t);
+  auto stamped_tick = [&](const runtime::LogEvent& x) {
+    for (const auto* a : adapters_) {
+      if (!a->ticks_at_outputs || !a->is_output(x.channel, x.data)) continue;
+      const auto key = stamps_.key(x.channel, x.data.data(), x.data.size());
+      if (key && key->utime > hub_->now_utime() && key->utime < e.utime) ticks.push_back(key->utime);
+    }
+  };
+  stamped_tick(e);
+  for (const auto& x : ahead_) stamped_tick(x);
+  std::sort(ticks.begin(), ticks.end());
+  ticks.erase(std::unique(ticks.begin(), ticks.end()), ticks.end());
+  for (const int64_t t : ticks) {
     hub_->set_utime(t);
     start_due(t);
     settle();

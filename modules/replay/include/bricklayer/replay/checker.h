@@ -31,6 +31,13 @@ struct CheckCounts {
   int64_t compared = 0, mismatches = 0, not_in_log = 0, orphans = 0;
   std::map<std::string, int64_t> mismatches_by_channel;
   std::map<std::string, int64_t> compared_by_channel;
+  std::map<std::string, int64_t> nearest_by_channel;  // of compared: paired by nearest stamp time
+  int64_t nearest = 0;
+  int64_t worst_nearest_offset_us = 0;  // the largest |replayed stamp - recorded stamp| of those
+  // Outputs on those channels that paired with nothing (recorded, replayed): no output of the other
+  // side about the same input within the tolerance (a projector state whose stack the other side
+  // showed only in a later or earlier state). Counted, not compared; also in orphans / not_in_log.
+  int64_t tick_unpaired[2] = {0, 0};
 };
 
 // Losses the logger itself reported in the log: the increase of its heartbeat's "lost" value.
@@ -51,6 +58,11 @@ class Checker {
   // out: where mismatches are printed (at most max_printed, then counted only).
   Checker(const MessageDiff& diff, std::ostream& out, int64_t log_start_utime, size_t max_printed = 10);
 
+  // Outputs stamped at a loop tick (output_matcher.h): on these channels, outputs unpaired by key pair
+  // by nearest stamp time within tolerance_us, and every pair on them is compared with tick_diff (which
+  // also leaves out the fields that depend on when the tick fell). tick_diff must outlive the checker.
+  void set_nearest(const std::vector<std::string>& channels, int64_t tolerance_us, const MessageDiff& tick_diff);
+
   void recorded(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime);
   void replayed(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime);
   void observe(const runtime::LogEvent& e) { losses_.observe(e); }
@@ -64,6 +76,8 @@ class Checker {
 
  private:
   const MessageDiff& diff_;
+  const MessageDiff* tick_diff_ = nullptr;
+  std::vector<std::string> nearest_channels_;
   std::ostream& out_;
   int64_t start_;
   size_t max_printed_;

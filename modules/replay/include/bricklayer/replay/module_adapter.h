@@ -45,6 +45,10 @@ struct ModuleAdapter {
   // they answer: the replay ticks it at the time of each of its recorded outputs as well, so a tick
   // the live node published on is a tick of the replay too.
   bool ticks_at_outputs = false;
+  // With ticks_at_outputs: the fields of its outputs that depend on when the tick fell (the stamp, a
+  // countdown read at the tick). On a log recorded live its outputs pair with the replayed ones by
+  // nearest stamp time (output_matcher.h), and those pairs are compared without these fields.
+  std::vector<std::string> tick_fields;
   // It decodes camera frames (BL_IMAGE) and projector images (BL_PROJECTOR): the replay then decodes
   // them ahead on a second thread (frames/decode_ahead.h).
   bool decodes_frames = false;
@@ -68,6 +72,7 @@ struct AdapterOptions {
   std::function<bool(const std::string&, const std::vector<uint8_t>&)> owns;
   std::vector<std::string> ignored;
   bool ticks_at_outputs = false;
+  std::vector<std::string> tick_fields;
   bool decodes_frames = false;
   // Settings a replay must force (no screen, no sound, no live files): applied after the recorded
   // configuration and --set; returns the notes that say what was changed.
@@ -84,6 +89,7 @@ ModuleAdapter node_adapter(std::string name, std::vector<std::string> compared,
   a.owns = options.owns;
   a.ignored = options.ignored;
   a.ticks_at_outputs = options.ticks_at_outputs;
+  a.tick_fields = options.tick_fields;
   a.decodes_frames = options.decodes_frames;
   a.build = [replay_settings = options.replay_settings](const std::string& recorded, const std::vector<std::string>& sets,
                                                         runtime::Bus& bus, const BuildContext& context) {

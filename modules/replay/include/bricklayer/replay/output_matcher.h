@@ -2,6 +2,15 @@
 // (channel + utime + frame_number), in bounded memory: the log is read in order and an output answers
 // an input read shortly before it, so anything unpaired for longer than a window of log time is
 // settled as unpaired. The same input answered twice (live: a module restarted) pairs with either.
+//
+// Outputs stamped at a loop tick of their own (projection's round_t and projector states, calibrate's
+// outputs) answer no input: on a log recorded live their stamps are the live node's ticks, which a
+// replay does not repeat exactly. On the channels named as such (set_nearest), an output that found no
+// pair by its key is paired with the other side's nearest one in stamp time (utime) about the same
+// input (the same frame_number, where the type has one: the stack a projector state drew), within a
+// tolerance: both sides' outputs aligned in the order they were stamped, at least total distance,
+// decided only once everything within the tolerance of both has arrived. Such a pair says so (Pair::nearest), so its tick-dependent fields
+// can be left out of the comparison.
 #pragma once
 
 #include <cstdint>
@@ -19,6 +28,8 @@ struct Pair {
   MessageKey key;
   int64_t utime = 0;  // log time of the later of the two
   std::vector<uint8_t> a, b;
+  bool nearest = false;      // paired by nearest stamp time (key: side 0's), not by key
+  int64_t b_stamp_utime = 0;  // side 1's stamp (its key's utime)
 };
 
 class OutputMatcher {
@@ -32,6 +43,10 @@ class OutputMatcher {
   // Settles everything older than window behind log_utime.
   void advance(int64_t log_utime);
   void finish();  // settles everything
+  // On these channels, outputs unpaired by key pair by nearest stamp time within tolerance_us.
+  // arrival_us: how long after its stamp an output may still reach the matcher (log time vs stamp).
+  void set_nearest(std::vector<std::string> channels, int64_t tolerance_us, int64_t arrival_us = 1'000'000);
+  int64_t nearest_tolerance_us() const { return tolerance_us_; }
 
  private:
   struct Waiting {
@@ -44,6 +59,10 @@ class OutputMatcher {
   int64_t window_us_;
   std::map<MessageKey, std::deque<Waiting>> waiting_[2];
   std::deque<std::pair<int64_t, MessageKey>> order_[2];  // arrival order, for settling
+  void pair_nearest(int64_t log_utime, bool everything);
+  bool is_nearest(const std::string& channel) const;
+  std::vector<std::string> nearest_channels_;
+  int64_t tolerance_us_ = 0, arrival_us_ = 0;
 };
 
 }  // namespace bricklayer::replay

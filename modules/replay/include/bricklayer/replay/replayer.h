@@ -17,6 +17,7 @@
 
 #include "bricklayer/common/channels.h"
 #include "bricklayer/frames/decode_ahead.h"
+#include "bricklayer/replay/message_diff.h"
 #include "bricklayer/replay/module_adapter.h"
 #include "bricklayer/replay/recording.h"
 #include "bricklayer/runtime/in_process_bus.h"
@@ -119,6 +120,7 @@ class Replayer {
   std::vector<const ModuleAdapter*> adapters_;
   std::vector<std::vector<std::string>> sets_;
   std::vector<std::string> compared_;
+  const MessageDiff stamps_;  // reads an output's stamp (its utime)
   BuildContext context_;  // its scratch folder is removed with the replayer
   int64_t events_ = 0, first_utime_ = 0, last_utime_ = 0;
   bool started_ = false, ended_ = false;
