@@ -57,20 +57,36 @@ Checker::Checker(const MessageDiff& diff, std::ostream& out, int64_t start, size
       matcher_(
           diff,
           [this](const Pair& p) {
+            const int64_t offset = p.b_stamp_utime - p.key.utime;
+            const bool tick_stamped = std::find(nearest_channels_.begin(), nearest_channels_.end(), p.key.channel) !=
+                                      nearest_channels_.end();
+            // Stamped by a live clock: before the logger received it (on the rig, stamp = log time).
+            const bool live_tick = tick_stamped && p.key.utime != p.a_log_utime;
+            // Two ticks are fair to compare only when they had the same inputs. An input delivered
+            // between them (a stack, a prediction, a command), or shortly before the earlier (the live
+            // node may not have handled it yet: the logger heard it first), was seen by one and maybe
+            // not the other, so their pictures and rounds may differ rightly. Counted, not compared.
+            if (live_tick) {
+              const int64_t lo = std::min(p.key.utime, p.b_stamp_utime) - kInputInFlightUs;
+              const int64_t hi = std::max(p.key.utime, p.b_stamp_utime);
+              const auto it = std::upper_bound(input_utimes_.begin(), input_utimes_.end(), lo);
+              if (it != input_utimes_.end() && *it <= hi) {
+                ++counts_.inputs_between;
+                ++counts_.inputs_between_by_channel[p.key.channel];
+                return;
+              }
+            }
             ++counts_.compared;
             ++counts_.compared_by_channel[p.key.channel];
-            const int64_t offset = p.b_stamp_utime - p.key.utime;
             if (p.nearest) {
               ++counts_.nearest;
               ++counts_.nearest_by_channel[p.key.channel];
               counts_.worst_nearest_offset_us = std::max<int64_t>(counts_.worst_nearest_offset_us, std::llabs(offset));
             }
             if (p.a == p.b) return;
-            // On a channel stamped at a tick, what depends on when the tick fell is left out of every pair:
-            // a key pair too has its round started at another tick (remaining_ms).
-            const bool tick_stamped = std::find(nearest_channels_.begin(), nearest_channels_.end(), p.key.channel) !=
-                                      nearest_channels_.end();
-            const MessageDiff& compare = tick_stamped && tick_diff_ ? *tick_diff_ : diff_;
+            // Stamped by a live tick, what depends on when the tick fell is left out of every pair: a
+            // pair by key too has its round started at another tick (remaining_ms).
+            const MessageDiff& compare = live_tick && tick_diff_ ? *tick_diff_ : diff_;
             const auto d = compare.differences(p.a, p.b);
             if (d.empty()) return;  // only run-to-run (or, paired by nearest time, tick-dependent) fields differ
             ++counts_.mismatches;
@@ -92,10 +108,24 @@ Checker::Checker(const MessageDiff& diff, std::ostream& out, int64_t start, size
               ++counts_.tick_unpaired[side];
           }) {}
 
-void Checker::set_nearest(const std::vector<std::string>& channels, int64_t tolerance_us, const MessageDiff& tick_diff) {
+void Checker::set_nearest(const std::vector<std::string>& channels, int64_t tolerance_us, const MessageDiff& tick_diff,
+                          const std::vector<std::string>& input_channels) {
   tick_diff_ = &tick_diff;
   nearest_channels_ = channels;
-  matcher_.set_nearest(channels, tolerance_us);
+  input_channels_ = input_channels;
+  // Outputs whose contents agree pair first (two round_t 1 ms apart, one a change the other tick did
+  // not make yet); one that differs still pairs, and is a mismatch.
+  matcher_.set_nearest(channels, tolerance_us, 1'000'000, [&tick_diff](const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+    return tick_diff.differences(a, b).empty();
+  });
+}
+
+void Checker::observe(const runtime::LogEvent& e) {
+  losses_.observe(e);
+  if (std::find(input_channels_.begin(), input_channels_.end(), e.channel) == input_channels_.end()) return;
+  if (input_utimes_.empty() || e.utime >= input_utimes_.back()) input_utimes_.push_back(e.utime);
+  // Pairs are decided within seconds of their stamps: older inputs are not needed.
+  while (!input_utimes_.empty() && input_utimes_.front() < e.utime - 30'000'000) input_utimes_.pop_front();
 }
 
 void Checker::recorded(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime) {

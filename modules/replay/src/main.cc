@@ -143,11 +143,12 @@ int Main(int argc, char** argv) {
   const MessageDiff diff(ignored);
   // Outputs stamped at a loop tick: unpaired by key, they pair by nearest stamp time, compared
   // without their tick-dependent fields (module_registry.cc lists them per module).
-  std::vector<std::string> nearest_channels, tick_fields;
+  std::vector<std::string> nearest_channels, tick_fields, tick_inputs;
   for (const auto& name : options.modules) {
     const ModuleAdapter& a = module_named(name);
     if (!a.ticks_at_outputs) continue;
     nearest_channels.insert(nearest_channels.end(), a.compared.begin(), a.compared.end());
+    tick_inputs.insert(tick_inputs.end(), a.tick_inputs.begin(), a.tick_inputs.end());
     for (const auto& f : a.tick_fields)
       if (std::find(tick_fields.begin(), tick_fields.end(), f) == tick_fields.end()) tick_fields.push_back(f);
   }
@@ -260,7 +261,7 @@ int Main(int argc, char** argv) {
 
   // --check / --update / --record-outputs: one replay against the log.
   Checker checker(diff, std::cout, log_start, static_cast<size_t>(max_printed));
-  if (!nearest_channels.empty()) checker.set_nearest(nearest_channels, kNearestToleranceUs, tick_diff);
+  if (!nearest_channels.empty()) checker.set_nearest(nearest_channels, kNearestToleranceUs, tick_diff, tick_inputs);
   const bool check = flags.get_bool("check");
   std::unique_ptr<runtime::LogWriter> outputs, updated;
   if (!flags.get("record-outputs").empty()) outputs = std::make_unique<runtime::LogWriter>(flags.get("record-outputs"));
@@ -372,6 +373,12 @@ int Main(int argc, char** argv) {
     std::cout << "paired by nearest time:";
     for (const auto& [ch, n] : c.nearest_by_channel) std::cout << " " << ch << " " << n;
     std::cout << " (replayed stamps within " << c.worst_nearest_offset_us / 1000.0 << " ms of the recorded ones)\n";
+  }
+  if (c.inputs_between > 0) {
+    std::cout << "paired but not compared (live ticks: an input delivered between the two stamps or up to "
+              << Checker::kInputInFlightUs / 1000 << " ms before the earlier):";
+    for (const auto& [ch, n] : c.inputs_between_by_channel) std::cout << " " << ch << " " << n;
+    std::cout << "\n";
   }
   if (c.tick_unpaired[0] + c.tick_unpaired[1] > 0)
     std::cout << "unpaired by time: " << c.tick_unpaired[0] << " recorded and " << c.tick_unpaired[1]

@@ -36,6 +36,11 @@ AdapterOptions<projection::ProjectionConfig> projection_options() {
   // on the runtime clock's schedule from the node's start, and is compared.
   o.tick_fields = {"round_t.utime", "round_t.remaining_ms", "projector_state_t.utime", "projector_state_t.image.utime",
                    "image_t.utime"};
+  // What it reads (projection_node.h): a pair by nearest time with one of these between its stamps
+  // drew other inputs, and is not compared.
+  o.tick_inputs = {channel(kStackChannel),        channel(kPredictionChannel),   channel(kCalibrationChannel),
+                   channel(kHintChannel),         channel(kPreviewChannel),      channel(kStudySessionChannel),
+                   channel(kStudyProblemChannel), channel(kCommandChannel)};
   o.replay_settings = [](projection::ProjectionConfig& c, const BuildContext&) {
     std::vector<std::string> notes;
     // No screen and no sound in a replay: SDL's offscreen video driver with the software renderer

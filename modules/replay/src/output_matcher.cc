@@ -21,6 +21,8 @@ void OutputMatcher::add(int side, const std::string& channel, std::vector<uint8_
     Pair p;
     p.key = *key;
     p.utime = log_utime;
+    p.b_stamp_utime = key->utime;
+    p.a_log_utime = side == 0 ? log_utime : it->second.front().utime;
     p.a = side == 0 ? std::move(bytes) : std::move(it->second.front().bytes);
     p.b = side == 0 ? std::move(it->second.front().bytes) : std::move(bytes);
     it->second.pop_front();
@@ -32,7 +34,9 @@ void OutputMatcher::add(int side, const std::string& channel, std::vector<uint8_
   order_[side].emplace_back(log_utime, *key);
 }
 
-void OutputMatcher::set_nearest(std::vector<std::string> channels, int64_t tolerance_us, int64_t arrival_us) {
+void OutputMatcher::set_nearest(std::vector<std::string> channels, int64_t tolerance_us, int64_t arrival_us,
+                                std::function<bool(const std::vector<uint8_t>&, const std::vector<uint8_t>&)> same) {
+  same_ = std::move(same);
   nearest_channels_ = std::move(channels);
   tolerance_us_ = tolerance_us;
   arrival_us_ = arrival_us;
@@ -61,14 +65,34 @@ void OutputMatcher::pair_nearest(int64_t log_utime, bool everything) {
       std::stable_sort(items[side].begin(), items[side].end(),
                        [](const Item& x, const Item& y) { return x.key.utime < y.key.utime; });
     }
+    // Nothing to decide yet: nothing old enough to pair or to be alone (the alignment compares
+    // contents, pictures decoded: it runs when an output is due, not on every event).
+    int64_t oldest = INT64_MAX;
+    for (int side = 0; side < 2; ++side)
+      if (!items[side].empty()) oldest = std::min<int64_t>(oldest, items[side].front().key.utime);
+    if (oldest >= decided) continue;
     // The two sequences aligned in stamp order (the order both published in), at least cost: a pair
-    // costs its stamps' distance, an output left alone the tolerance. Only outputs about the same input
-    // pair (the same frame_number where the type has one: the stack drawn), within the tolerance.
+    // costs its stamps' distance (plus the tolerance when their contents differ), an output left alone
+    // the tolerance. Only outputs about the same input pair (the same frame_number where the type has
+    // one: the stack drawn), within the tolerance.
     const size_t n = items[0].size(), m = items[1].size();
+    auto bytes = [this](int side, const Item& x) -> const std::vector<uint8_t>& {
+      return waiting_[side].find(x.key)->second[x.index].bytes;
+    };
     auto pairable = [&](size_t i, size_t j) {
       return items[0][i].key.frame_number == items[1][j].key.frame_number &&
              std::llabs(items[0][i].key.utime - items[1][j].key.utime) <= tolerance_us_;
     };
+    std::vector<int64_t> pair_cost(n * m, -1);  // -1: not pairable
+    for (size_t i = 0; i < n; ++i)
+      for (size_t j = 0; j < m; ++j)
+        if (pairable(i, j)) {
+          const auto& a = bytes(0, items[0][i]);
+          const auto& b = bytes(1, items[1][j]);
+          const bool equal = a == b || (same_ && same_(a, b));
+          pair_cost[i * m + j] = std::llabs(items[0][i].key.utime - items[1][j].key.utime) + (equal ? 0 : tolerance_us_);
+        }
+    auto paired_cost = [&](size_t i, size_t j) { return pair_cost[i * m + j]; };
     std::vector<int64_t> cost((n + 1) * (m + 1));
     auto at = [&](size_t i, size_t j) -> int64_t& { return cost[i * (m + 1) + j]; };
     for (size_t i = 0; i <= n; ++i)
@@ -78,15 +102,13 @@ void OutputMatcher::pair_nearest(int64_t log_utime, bool everything) {
           continue;
         }
         int64_t c = std::min<int64_t>(at(i - 1, j), at(i, j - 1)) + tolerance_us_;
-        if (pairable(i - 1, j - 1))
-          c = std::min<int64_t>(c, at(i - 1, j - 1) + std::llabs(items[0][i - 1].key.utime - items[1][j - 1].key.utime));
+        if (paired_cost(i - 1, j - 1) >= 0) c = std::min<int64_t>(c, at(i - 1, j - 1) + paired_cost(i - 1, j - 1));
         at(i, j) = c;
       }
     std::vector<std::pair<size_t, size_t>> chosen;
     std::vector<bool> used[2] = {std::vector<bool>(n), std::vector<bool>(m)};
     for (size_t i = n, j = m; i > 0 && j > 0;) {
-      if (pairable(i - 1, j - 1) &&
-          at(i, j) == at(i - 1, j - 1) + std::llabs(items[0][i - 1].key.utime - items[1][j - 1].key.utime)) {
+      if (paired_cost(i - 1, j - 1) >= 0 && at(i, j) == at(i - 1, j - 1) + paired_cost(i - 1, j - 1)) {
         used[0][i - 1] = used[1][j - 1] = true;
         if (std::max(items[0][i - 1].key.utime, items[1][j - 1].key.utime) < decided) chosen.emplace_back(i - 1, j - 1);
         --i;
@@ -107,6 +129,7 @@ void OutputMatcher::pair_nearest(int64_t log_utime, bool everything) {
       p.key = x.key;
       p.nearest = true;
       p.b_stamp_utime = y.key.utime;
+      p.a_log_utime = waiting_[0][x.key][x.index].utime;
       p.a = waiting_[0][x.key][x.index].bytes;
       p.b = waiting_[1][y.key][y.index].bytes;
       p.utime = std::max(waiting_[0][x.key][x.index].utime, waiting_[1][y.key][y.index].utime);

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <ostream>
 #include <string>
@@ -38,6 +39,10 @@ struct CheckCounts {
   // side about the same input within the tolerance (a projector state whose stack the other side
   // showed only in a later or earlier state). Counted, not compared; also in orphans / not_in_log.
   int64_t tick_unpaired[2] = {0, 0};
+  // Pairs of live-stamped outputs not compared: an input was delivered between their two stamps or
+  // within kInputInFlightUs before the earlier.
+  int64_t inputs_between = 0;
+  std::map<std::string, int64_t> inputs_between_by_channel;
 };
 
 // Losses the logger itself reported in the log: the increase of its heartbeat's "lost" value.
@@ -55,17 +60,23 @@ class LoggerLosses {
 
 class Checker {
  public:
+  // How long before a live tick an input the logger received may still be unhandled by the live node.
+  static constexpr int64_t kInputInFlightUs = 10'000;
+
   // out: where mismatches are printed (at most max_printed, then counted only).
   Checker(const MessageDiff& diff, std::ostream& out, int64_t log_start_utime, size_t max_printed = 10);
 
   // Outputs stamped at a loop tick (output_matcher.h): on these channels, outputs unpaired by key pair
   // by nearest stamp time within tolerance_us, and every pair on them is compared with tick_diff (which
   // also leaves out the fields that depend on when the tick fell). tick_diff must outlive the checker.
-  void set_nearest(const std::vector<std::string>& channels, int64_t tolerance_us, const MessageDiff& tick_diff);
+  // input_channels: what the tick-stamped modules read; a pair by nearest time with an input delivered
+  // between its two stamps is counted (inputs_between), not compared.
+  void set_nearest(const std::vector<std::string>& channels, int64_t tolerance_us, const MessageDiff& tick_diff,
+                   const std::vector<std::string>& input_channels = {});
 
   void recorded(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime);
   void replayed(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime);
-  void observe(const runtime::LogEvent& e) { losses_.observe(e); }
+  void observe(const runtime::LogEvent& e);
   void finish();
 
   const CheckCounts& counts() const { return counts_; }
@@ -77,7 +88,8 @@ class Checker {
  private:
   const MessageDiff& diff_;
   const MessageDiff* tick_diff_ = nullptr;
-  std::vector<std::string> nearest_channels_;
+  std::vector<std::string> nearest_channels_, input_channels_;
+  std::deque<int64_t> input_utimes_;  // log times of the recent inputs, in order
   std::ostream& out_;
   int64_t start_;
   size_t max_printed_;

@@ -49,6 +49,9 @@ struct ModuleAdapter {
   // countdown read at the tick). On a log recorded live its outputs pair with the replayed ones by
   // nearest stamp time (output_matcher.h), and those pairs are compared without these fields.
   std::vector<std::string> tick_fields;
+  // With ticks_at_outputs: the channels it reads. Two outputs paired by nearest time are compared only
+  // when none of these was delivered between their stamps (else each tick saw other inputs).
+  std::vector<std::string> tick_inputs;
   // It decodes camera frames (BL_IMAGE) and projector images (BL_PROJECTOR): the replay then decodes
   // them ahead on a second thread (frames/decode_ahead.h).
   bool decodes_frames = false;
@@ -73,6 +76,7 @@ struct AdapterOptions {
   std::vector<std::string> ignored;
   bool ticks_at_outputs = false;
   std::vector<std::string> tick_fields;
+  std::vector<std::string> tick_inputs;
   bool decodes_frames = false;
   // Settings a replay must force (no screen, no sound, no live files): applied after the recorded
   // configuration and --set; returns the notes that say what was changed.
@@ -90,6 +94,7 @@ ModuleAdapter node_adapter(std::string name, std::vector<std::string> compared,
   a.ignored = options.ignored;
   a.ticks_at_outputs = options.ticks_at_outputs;
   a.tick_fields = options.tick_fields;
+  a.tick_inputs = options.tick_inputs;
   a.decodes_frames = options.decodes_frames;
   a.build = [replay_settings = options.replay_settings](const std::string& recorded, const std::vector<std::string>& sets,
                                                         runtime::Bus& bus, const BuildContext& context) {

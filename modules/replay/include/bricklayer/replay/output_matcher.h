@@ -8,8 +8,10 @@
 // replay does not repeat exactly. On the channels named as such (set_nearest), an output that found no
 // pair by its key is paired with the other side's nearest one in stamp time (utime) about the same
 // input (the same frame_number, where the type has one: the stack a projector state drew), within a
-// tolerance: both sides' outputs aligned in the order they were stamped, at least total distance,
-// decided only once everything within the tolerance of both has arrived. Such a pair says so (Pair::nearest), so its tick-dependent fields
+// tolerance: both sides' outputs aligned in the order they were stamped, at least cost (a pair costs
+// its stamps' distance, plus the tolerance when their contents differ; an output left alone costs the
+// tolerance: so an output whose content differs still pairs and is caught, unless an equal one of the
+// other side is as near), decided only once everything within the tolerance of both has arrived. Such a pair says so (Pair::nearest), so its tick-dependent fields
 // can be left out of the comparison.
 #pragma once
 
@@ -30,6 +32,7 @@ struct Pair {
   std::vector<uint8_t> a, b;
   bool nearest = false;      // paired by nearest stamp time (key: side 0's), not by key
   int64_t b_stamp_utime = 0;  // side 1's stamp (its key's utime)
+  int64_t a_log_utime = 0;    // when side 0's arrived (its log time)
 };
 
 class OutputMatcher {
@@ -45,7 +48,9 @@ class OutputMatcher {
   void finish();  // settles everything
   // On these channels, outputs unpaired by key pair by nearest stamp time within tolerance_us.
   // arrival_us: how long after its stamp an output may still reach the matcher (log time vs stamp).
-  void set_nearest(std::vector<std::string> channels, int64_t tolerance_us, int64_t arrival_us = 1'000'000);
+  // same(a, b): whether two outputs agree in what is compared (empty: by their bytes).
+  void set_nearest(std::vector<std::string> channels, int64_t tolerance_us, int64_t arrival_us = 1'000'000,
+                   std::function<bool(const std::vector<uint8_t>&, const std::vector<uint8_t>&)> same = {});
   int64_t nearest_tolerance_us() const { return tolerance_us_; }
 
  private:
@@ -63,6 +68,7 @@ class OutputMatcher {
   bool is_nearest(const std::string& channel) const;
   std::vector<std::string> nearest_channels_;
   int64_t tolerance_us_ = 0, arrival_us_ = 0;
+  std::function<bool(const std::vector<uint8_t>&, const std::vector<uint8_t>&)> same_;
 };
 
 }  // namespace bricklayer::replay
