@@ -5,15 +5,11 @@
 #include <stdexcept>
 #include <string>
 
+#include "bricklayer/core/splitmix64.h"
+
 namespace bricklayer::piles {
 namespace {
-uint64_t next(uint64_t& s) {
-  uint64_t z = (s += 0x9E3779B97F4A7C15ULL);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
-double uniform(uint64_t& s, double lo, double hi) { return lo + (hi - lo) * (static_cast<double>(next(s) >> 11) / 9007199254740992.0); }
+double uniform(uint64_t& s, double lo, double hi) { return lo + (hi - lo) * core::unit_double(core::splitmix64(s)); }
 }  // namespace
 
 core::Stack random_pile(uint64_t seed, const PileOptions& o) {

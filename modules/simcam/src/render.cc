@@ -8,23 +8,20 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "bricklayer/core/splitmix64.h"
+
 namespace bricklayer::simcam {
 namespace {
 
 // ---------- deterministic random numbers (no std:: distributions: identical on every platform) ----------
 
-uint64_t splitmix64(uint64_t& state) {
-  uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
+using core::splitmix64;
 
 class Random {
  public:
   explicit Random(uint64_t seed) : state_(seed * 0xD1B54A32D192ED03ULL + 0x1234567ULL) {}
   uint64_t next() { return splitmix64(state_); }
-  double uniform() { return static_cast<double>(next() >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
+  double uniform() { return core::unit_double(next()); }  // [0, 1)
   double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
   int integer(int lo, int hi) { return lo + static_cast<int>(next() % static_cast<uint64_t>(hi - lo + 1)); }
 

@@ -17,6 +17,7 @@
 
 #include "evaluate.h"
 #include "bricklayer/common/flags.h"
+#include "bricklayer/core/splitmix64.h"
 #include "bricklayer/piles/random_pile.h"
 #include "bricklayer/simcam/render.h"
 #include "bricklayer/detection/detector.h"
@@ -34,12 +35,8 @@ double percentile(std::vector<double> v, double q) {
   return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
 }
 
-uint64_t mix(uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
+// A stateless hash of a seed: one step of SplitMix64 from it.
+uint64_t mix(uint64_t x) { return core::splitmix64(x); }
 
 // Depth of every candidate line relative to its frame's median line, split by whether it lies on a true
 // end line: the evidence for DetectorConfig::min_relative_depth (--line-stats).
