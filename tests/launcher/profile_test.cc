@@ -285,6 +285,15 @@ TEST_CASE("the logger spec: a disk budget, a frame policy, and the command line 
   CHECK(std::count(whole_args.begin(), whole_args.end(), "--answers-with-frames") == 0);
   CHECK(profile_error(R"({"modules":[],"logger":{"frames":{"rate":2,"answers":"some"}}})").find("'answers' must be") !=
         std::string::npos);
+  // The windows' hourly allowance: one more flag when set.
+  const Profile capped = parse_profile(R"({"modules":[],"logger":{"file":"logs/x","frames":{"rate":2,"max_mb_per_hour":450}}})", "t");
+  const std::vector<std::string> capped_args = logger_arguments(*capped.logger, "f");
+  CHECK(std::count(capped_args.begin(), capped_args.end(), "--max-mb-per-hour=450") == 1);
+  CHECK(std::count(whole_args.begin(), whole_args.end(), "--max-mb-per-hour=450") == 0);
+  CHECK(profile_error(R"({"modules":[],"logger":{"frames":{"rate":2,"max_mb_per_hour":-3}}})").find("'max_mb_per_hour' must be >=") !=
+        std::string::npos);
+  CHECK(profile_error(R"({"modules":[],"logger":{"frames":{"rate":2,"max_mb_per_hour":5000000}}})").find("--max-mb-per-hour") !=
+        std::string::npos);
 }
 
 TEST_CASE("every shipped profile's logger command line is one bricklayer-logger accepts") {

@@ -172,3 +172,39 @@ TEST_CASE("a day's policy: frames thinned, full rate around a red block, the mom
   CHECK(e.utime <= start + 12'000'000);
   CHECK(e.utime > start + 10'900'000);
 }
+
+TEST_CASE("the hourly allowance: a red window the allowance cannot pay for falls back to the reduced rate, counted") {
+  harness::ScratchDir dir("logger-node-allowance");
+  harness::Rig rig(1000);
+  logger::LoggerConfig config;
+  config.file = (dir / "day").string();
+  config.frame_rate = 1;
+  config.full_rate_before_s = 2;
+  config.full_rate_after_s = 3;
+  config.max_mb_per_hour = 0.01;  // 10 kB: less than the reduced rate and the predictions already cost
+  config.exclude = "BL_HEARTBEAT|BL_CONFIG";
+  config.flush_ms = 0;
+  auto& node = rig.add<logger::LoggerNode>(config);
+  for (int f = 0; f < 30 * 12; ++f) {
+    rig.publish(channel(kImageChannel), frame("cam", f));
+    prediction_t p{};
+    p.frame_number = f;
+    p.status = prediction_t::STATUS_OK;
+    p.num_blocks = 2;
+    p.blocks.resize(2);
+    if (f >= 240 && f < 270) p.blocks[1].state = block_prediction_t::STATE_CAUSE;  // red at 8 s
+    rig.publish(channel(kPredictionChannel), p);
+    rig.run_for(std::chrono::microseconds(33'333));
+  }
+  rig.run_for(3s);
+  REQUIRE(written(rig, node, 360 + node.policy().frames_kept()));
+  // Without the allowance the 5 s window would keep about 150 frames; here the reduced rate only.
+  CHECK(node.policy().frames_kept() <= 14);
+  CHECK(node.policy().window_frames_refused() >= 140);
+  rig.run_for(1s);
+  CHECK(harness::heartbeat_value(node.heartbeat(), "window_frames_refused").value_or(0) >= 140);
+  // Every prediction is still there.
+  int predictions = 0;
+  for (const auto& e : read_log((dir / "day.00").string())) predictions += e.channel == channel(kPredictionChannel);
+  CHECK(predictions == 360);
+}

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "bricklayer/image_t.hpp"
+#include "bricklayer/logger/event_writer.h"
 #include "bricklayer/logger/recording_policy.h"
 #include "bricklayer/prediction_t.hpp"
 #include "bricklayer/stack_t.hpp"
@@ -164,4 +165,90 @@ TEST_CASE("without answer channels every stack is kept, whatever became of its f
   CHECK(stacks == 300);
   CHECK(p.answers_thinned() == 0);
   CHECK(p.frames_thinned() > 250);
+}
+
+namespace {
+// Frames of `bytes` each at 30 a second for `seconds`, a moment every `every_s` seconds (0: none) and an
+// exempt one at `mark_s` (< 0: none), through the policy; the bytes kept per frame time.
+struct AllowanceRun {
+  int64_t kept_bytes = 0, kept_frames = 0;
+  std::vector<int64_t> kept_times;
+};
+logger::FramePolicyOptions with_allowance(double mb_per_hour) {
+  logger::FramePolicyOptions o;
+  o.rate = 2;
+  o.max_mb_per_hour = mb_per_hour;
+  return o;
+}
+AllowanceRun run_allowance(logger::RecordingPolicy& p, double seconds, int bytes, double every_s, double mark_s = -1) {
+  AllowanceRun r;
+  const int64_t every = static_cast<int64_t>(every_s * 1e6), mark = static_cast<int64_t>(mark_s * 1e6);
+  const auto n = static_cast<int64_t>(seconds * 30);
+  auto take = [&](std::vector<logger::Event> out) {
+    for (const auto& e : out) {
+      r.kept_bytes += logger::EventWriter::file_size_of(e);
+      ++r.kept_frames;
+      r.kept_times.push_back(e.utime);
+    }
+  };
+  for (int64_t i = 0; i < n; ++i) {
+    const int64_t t = i * kFrameUs;
+    p.offer({t, "BL_IMAGE", std::vector<uint8_t>(static_cast<size_t>(bytes), 7)});
+    if (every > 0 && t / every != (t - kFrameUs) / every && i > 0) p.moment(t);
+    if (mark >= 0 && t >= mark && t - kFrameUs < mark) p.moment(t, true);
+    take(p.release(t));
+  }
+  take(p.release_all());
+  return r;
+}
+}  // namespace
+
+TEST_CASE("the hourly allowance bounds a busy recording: windows full rate only while it can pay") {
+  // 10 kB frames: the reduced rate (2 a second) costs 72 MB an hour, full rate 1080 MB. A moment every
+  // 20 s with 10 s windows each side would keep every frame; an allowance of 200 MB an hour holds
+  // 3 hours to at most (3 + 1) * 200 MB, and one frame (the last may overdraw it).
+  logger::RecordingPolicy capped(with_allowance(200));
+  const AllowanceRun r = run_allowance(capped, 3 * 3600, 10'000, 20);
+  CHECK(r.kept_bytes <= 4 * 200'000'000LL + 10'100);
+  CHECK(r.kept_bytes > 3 * 200'000'000LL);  // the allowance is spent, not wasted
+  CHECK(capped.window_frames_refused() > 0);
+  // Every frame is in a window but for the first and the last 10 s (moments from 20 s to 10780 s): every
+  // one of them is kept or counted as refused.
+  CHECK(capped.window_frames_refused() + capped.frames_kept() > 3 * 3600 * 30 - 20 * 30);
+  // The reduced rate is never given up: every half second holds a frame.
+  for (size_t i = 1; i < r.kept_times.size(); ++i) REQUIRE(r.kept_times[i] - r.kept_times[i - 1] <= 500'000 + kFrameUs);
+  // Without the allowance the same day keeps every frame but in its first and last 10 s.
+  logger::RecordingPolicy uncapped(with_allowance(0));
+  const AllowanceRun all = run_allowance(uncapped, 3 * 3600, 10'000, 20);
+  CHECK(all.kept_frames > 3 * 3600 * 30 - 20 * 30);
+  CHECK(all.kept_bytes > 3 * 1000'000'000LL);
+  CHECK(uncapped.window_frames_refused() == 0);
+}
+
+TEST_CASE("an allowance the recording stays within changes nothing, and a quiet hour refills it") {
+  // One moment every 10 minutes: 20 s of 1080 MB/hour full rate each, 6 an hour = 36 MB + 72 MB reduced.
+  logger::RecordingPolicy p(with_allowance(200));
+  logger::RecordingPolicy free_run(with_allowance(0));
+  const AllowanceRun a = run_allowance(p, 2 * 3600, 10'000, 600), b = run_allowance(free_run, 2 * 3600, 10'000, 600);
+  CHECK(p.window_frames_refused() == 0);
+  CHECK(a.kept_times == b.kept_times);
+}
+
+TEST_CASE("an operator's mark keeps its whole window when the allowance is spent") {
+  // 2 kB frames: 14 MB an hour reduced, 216 at full rate: 30 MB an hour is spent within minutes.
+  logger::RecordingPolicy p(with_allowance(30));
+  const double mark_s = 1800;
+  const AllowanceRun r = run_allowance(p, 3600, 2'000, 20, mark_s);
+  CHECK(p.window_frames_refused() > 0);
+  int in_mark_window = 0;
+  for (int64_t t : r.kept_times)
+    if (t >= (mark_s - 10) * 1e6 && t <= (mark_s + 10) * 1e6) ++in_mark_window;
+  CHECK(in_mark_window >= 20 * 30 - 2);
+  // A window as busy at 1200 s, not exempt: the spent allowance keeps it near the reduced rate.
+  int in_other_window = 0;
+  for (int64_t t : r.kept_times)
+    if (t >= 1190e6 && t <= 1210e6) ++in_other_window;
+  CHECK(in_other_window < 20 * 30 / 2);
+  // A negative or non-finite allowance is refused.
+  CHECK_THROWS_AS(logger::RecordingPolicy(with_allowance(-1)), std::invalid_argument);
 }

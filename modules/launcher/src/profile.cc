@@ -117,6 +117,7 @@ void check_logger_rules(const LoggerSpec& spec, const std::string& where) {
     c.full_rate_before_s = spec.frames->before_s;
     c.full_rate_after_s = spec.frames->after_s;
     c.answers_with_frames = spec.frames->answers_with_frames;
+    c.max_mb_per_hour = spec.frames->max_mb_per_hour;
   }
   try {
     runtime::validate(c);
@@ -187,14 +188,14 @@ Profile parse_profile(const std::string& json_text, const std::string& name) {
     spec.split_mb = number(l, "split_mb", spec.split_mb, lw, 0.01);
     if (l.contains("frames") && !l.at("frames").is_null()) {
       const json& f = l.at("frames");
-      if (!f.is_object()) throw ProfileError(lw + ": 'frames' must be an object {rate, before_s, after_s, answers}");
-      check_keys(f, {"rate", "before_s", "after_s", "answers"}, lw + " frames");
-      FrameSpec frames;
-      frames.before_s = logger::LoggerConfig{}.full_rate_before_s;
-      frames.after_s = logger::LoggerConfig{}.full_rate_after_s;
+      if (!f.is_object())
+        throw ProfileError(lw + ": 'frames' must be an object {rate, before_s, after_s, answers, max_mb_per_hour}");
+      check_keys(f, {"rate", "before_s", "after_s", "answers", "max_mb_per_hour"}, lw + " frames");
+      FrameSpec frames{.before_s = logger::LoggerConfig{}.full_rate_before_s, .after_s = logger::LoggerConfig{}.full_rate_after_s};
       frames.rate = number(f, "rate", frames.rate, lw + " frames", 0.001);
       frames.before_s = number(f, "before_s", frames.before_s, lw + " frames");
       frames.after_s = number(f, "after_s", frames.after_s, lw + " frames");
+      frames.max_mb_per_hour = number(f, "max_mb_per_hour", 0, lw + " frames");
       if (f.contains("answers")) {
         const json& a = f.at("answers");
         if (!a.is_string() || (a != "with_frames" && a != "whole"))
@@ -265,6 +266,7 @@ std::vector<std::string> logger_arguments(const LoggerSpec& l, const std::string
     args.push_back("--full-rate-before-s=" + text(l.frames->before_s));
     args.push_back("--full-rate-after-s=" + text(l.frames->after_s));
     if (l.frames->answers_with_frames) args.push_back("--answers-with-frames");
+    if (l.frames->max_mb_per_hour > 0) args.push_back("--max-mb-per-hour=" + text(l.frames->max_mb_per_hour));
   }
   args.push_back(file);
   return args;

@@ -54,6 +54,7 @@ FramePolicyOptions frame_policy(const LoggerConfig& c) {
   f.before_s = c.full_rate_before_s;
   f.after_s = c.full_rate_after_s;
   if (c.answers_with_frames) f.answer_channels = answer_channels();
+  f.max_mb_per_hour = c.max_mb_per_hour;
   // The delay line shares the unwritten bound: together they never hold more than twice it.
   f.max_held_bytes = static_cast<int64_t>(std::llround(c.max_unwritten_mb * 1024 * 1024));
   return f;
@@ -96,6 +97,9 @@ void LoggerNode::check(const Config& c) {
                                 runtime::config_detail::to_text(c.budget_mb));
   if (c.budget_mb > 0 && c.split_mb == 0)
     throw std::invalid_argument("--budget-mb needs --split-mb (the budget deletes whole files, never the open one)");
+  if (c.max_mb_per_hour > 0 && c.frame_rate == 0)
+    throw std::invalid_argument("--max-mb-per-hour needs --frame-rate (it bounds the windows of full-rate frames, "
+                                "and without a reduced rate every frame is kept)");
 }
 
 runtime::LcmBusOptions LoggerNode::bus_options(const Config& config) {
@@ -158,7 +162,7 @@ void LoggerNode::on_message(const runtime::Received& r) {
   e.data.assign(r.data, r.data + r.size);
   if (std::optional<Moment> m = moments_.observe(r.channel, r.data, r.size, r.utime)) {
     ++moments_seen_;
-    if (MomentDetector::wants_full_rate(*m)) policy_.moment(m->utime);
+    if (MomentDetector::wants_full_rate(*m)) policy_.moment(m->utime, m->kind == "mark");
     log::info("moment: ", m->kind, m->note.empty() ? "" : " (" + m->note + ")");
     writer_->note(std::move(*m));
   }
@@ -210,6 +214,7 @@ void LoggerNode::update_figures() {
   set_value("frames_kept", static_cast<double>(policy_.frames_kept()));
   set_value("frames_thinned", static_cast<double>(policy_.frames_thinned()));
   set_value("answers_thinned", static_cast<double>(policy_.answers_thinned()));
+  set_value("window_frames_refused", static_cast<double>(policy_.window_frames_refused()));
   set_value("held_bytes", static_cast<double>(policy_.held_bytes()));
   set_value("moments", static_cast<double>(moments_seen_));
   const int64_t lost = w.dropped + kernel_drops_ + gaps_.load();
@@ -248,7 +253,8 @@ void LoggerNode::before_stop() {
             " not kept (disk full or over budget), ", excluded_, " excluded; ", w.deleted_files, " old file(s) deleted (",
             mb(w.deleted_bytes), "), the series holds ", mb(w.series_bytes), ", ", mb(w.free_bytes), " free; frames ",
             policy_.frames_kept(), " kept, ", policy_.frames_thinned(), " thinned (and ",
-            policy_.answers_thinned(), " of their answers); ", moments_seen_, " moments");
+            policy_.answers_thinned(), " of their answers; ", policy_.window_frames_refused(),
+            " in windows the hourly allowance could not pay for); ", moments_seen_, " moments");
 }
 
 }  // namespace bricklayer::logger

@@ -23,14 +23,39 @@ std::optional<std::pair<int64_t, int64_t>> frame_key(const std::vector<uint8_t>&
   return std::make_pair(at(8), at(16));
 }
 
+// Whether t is in a window: some moment m with m - before <= t <= m + after. Frames leave in time order,
+// so the moments whose window has closed are done and dropped.
+bool in_window(std::deque<int64_t>& moments, int64_t t, int64_t before_us, int64_t after_us) {
+  while (!moments.empty() && moments.front() + after_us < t) moments.pop_front();
+  return !moments.empty() && moments.front() - before_us <= t;
+}
+
 }  // namespace
 
 RecordingPolicy::RecordingPolicy(FramePolicyOptions options) : options_(std::move(options)) {
-  for (double v : {options_.rate, options_.before_s, options_.after_s})
-    if (!std::isfinite(v) || v < 0) throw std::invalid_argument("frame rate and window lengths must be finite and >= 0");
+  for (double v : {options_.rate, options_.before_s, options_.after_s, options_.max_mb_per_hour})
+    if (!std::isfinite(v) || v < 0)
+      throw std::invalid_argument("frame rate, window lengths and the hourly allowance must be finite and >= 0");
   before_us_ = static_cast<int64_t>(std::llround(options_.before_s * 1e6));
   after_us_ = static_cast<int64_t>(std::llround(options_.after_s * 1e6));
   period_us_ = options_.rate > 0 ? static_cast<int64_t>(std::llround(1e6 / options_.rate)) : 0;
+  capacity_ = options_.max_mb_per_hour * 1e6;
+  per_us_ = capacity_ / 3.6e9;
+  allowance_ = capacity_;
+}
+
+void RecordingPolicy::refill(int64_t t) {
+  if (capacity_ <= 0) return;
+  if (refilled_at_ != INT64_MIN && t > refilled_at_)
+    allowance_ = std::min(capacity_, allowance_ + per_us_ * static_cast<double>(t - refilled_at_));
+  if (refilled_at_ == INT64_MIN || t > refilled_at_) refilled_at_ = t;
+}
+
+void RecordingPolicy::pay(int64_t bytes) {
+  if (capacity_ <= 0) return;
+  // A debt of at most one hour's allowance: after a stretch whose thinned stream alone overspent it
+  // (more blocks than the allowance was sized for), windows come back within the hour it is repaid.
+  allowance_ = std::max(-capacity_, allowance_ - static_cast<double>(bytes));
 }
 
 void RecordingPolicy::offer(Event e) {
@@ -38,17 +63,22 @@ void RecordingPolicy::offer(Event e) {
   held_.push_back(std::move(e));
 }
 
-void RecordingPolicy::moment(int64_t utime) {
-  if (!moments_.empty() && utime < moments_.back()) utime = moments_.back();  // arrival order
-  moments_.push_back(utime);
+void RecordingPolicy::moment(int64_t utime, bool exempt) {
+  std::deque<int64_t>& moments = exempt ? exempt_ : moments_;
+  if (!moments.empty() && utime < moments.back()) utime = moments.back();  // arrival order
+  moments.push_back(utime);
 }
 
-bool RecordingPolicy::keep_frame(int64_t t) {
-  // Inside a window: some moment m with m - before <= t <= m + after.
-  while (!moments_.empty() && moments_.front() + after_us_ < t) moments_.pop_front();
-  const bool in_window = !moments_.empty() && moments_.front() - before_us_ <= t;
+
+bool RecordingPolicy::keep_frame(int64_t t, int64_t bytes) {
+  const bool exempt = in_window(exempt_, t, before_us_, after_us_);
+  bool window = in_window(moments_, t, before_us_, after_us_) || exempt;
   const bool due = last_kept_ == INT64_MIN || t - last_kept_ >= period_us_;
-  if (in_window || due) {
+  if (window && !due && !exempt && capacity_ > 0 && allowance_ < static_cast<double>(bytes)) {
+    ++window_frames_refused_;
+    window = false;
+  }
+  if (window || due) {
     // The reduced rate is kept on its own grid, so a window does not shift it.
     if (due) last_kept_ = last_kept_ == INT64_MIN || t - last_kept_ >= 2 * period_us_ ? t : last_kept_ + period_us_;
     return true;
@@ -72,11 +102,14 @@ void RecordingPolicy::remember_thinned(const FrameKey& key) {
 
 void RecordingPolicy::leave(std::vector<Event>& out) {
   Event& e = held_.front();
-  held_bytes_ -= EventWriter::file_size_of(e);
+  const int64_t bytes = EventWriter::file_size_of(e);
+  held_bytes_ -= bytes;
+  refill(e.utime);
+  const size_t before = out.size();
   if (!thins()) {
     out.push_back(std::move(e));
   } else if (e.channel == options_.frame_channel) {
-    if (keep_frame(e.utime)) {
+    if (keep_frame(e.utime, bytes)) {
       ++frames_kept_;
       out.push_back(std::move(e));
     } else {
@@ -95,6 +128,7 @@ void RecordingPolicy::leave(std::vector<Event>& out) {
   } else {
     out.push_back(std::move(e));
   }
+  if (out.size() > before) pay(bytes);
   held_.pop_front();
 }
 

@@ -34,10 +34,11 @@ struct ModuleSpec {
 
 // Camera frames outside the full-rate windows (modules/logger/README.md, "A day within a disk budget").
 struct FrameSpec {
-  double rate = 2;       // frames kept per second
-  double before_s = 10;  // every frame this long before a moment (red, collapse, round end, mark) ...
-  double after_s = 10;   // ... and this long after
+  double rate = 2;    // frames kept per second
+  double before_s;    // every frame this long before a moment (red, collapse, round end, mark) ...
+  double after_s;     // ... and this long after; both default to the logger's own (LoggerConfig)
   bool answers_with_frames = false;  // "answers": "with_frames": a thinned frame's stacks, predictions ... go too
+  double max_mb_per_hour = 0;        // the windows' hourly allowance (recording_policy.h); 0 = none
 };
 
 struct LoggerSpec {

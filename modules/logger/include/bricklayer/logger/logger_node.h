@@ -21,7 +21,8 @@
 //   windows around moments (recording_policy.h, moment_detector.h). SIGINT/SIGTERM: what was received is
 //   written and synced, then exit 0.
 // Values also: lost (received, not kept: no room), deleted_files, deleted_bytes, series_bytes,
-//   free_bytes, budget_bytes, frames_kept, frames_thinned, answers_thinned, held_bytes, moments.
+//   free_bytes, budget_bytes, frames_kept, frames_thinned, answers_thinned, window_frames_refused,
+//   held_bytes, moments.
 #pragma once
 
 #include <atomic>
@@ -59,6 +60,7 @@ struct LoggerConfig {
   double full_rate_before_s = 10;
   double full_rate_after_s = 10;
   bool answers_with_frames = false;
+  double max_mb_per_hour = 0;
   bool no_index = false;
 
   template <typename Visitor>
@@ -92,6 +94,11 @@ struct LoggerConfig {
     v(runtime::param("full-rate-after-s", full_rate_after_s, "with --frame-rate: every frame this long after a moment").range(0, 600));
     v(runtime::param("answers-with-frames", answers_with_frames,
                      "with --frame-rate: a thinned frame's stacks, predictions, timings and previews are thinned with it"));
+    v(runtime::param("max-mb-per-hour", max_mb_per_hour,
+                     "with --frame-rate: windows keep full rate only while the recording stays within this many MB "
+                     "(1e6 bytes) an hour on average, one hour's worth at most at once; an operator's mark always "
+                     "(0 = no limit)")
+          .range(0, 1e6));
     v(runtime::param("no-index", no_index, "write no FILE.index (it is never written with --rotate > 0: rotation renames the parts)"));
   }
   // "" for a valid regular expression, else why not.

@@ -15,6 +15,16 @@
 // reduced rate and the windows hold everything. An answer names its frame by its first two fields,
 // utime and frame_number, as image_t does (every answer type is declared so; replay pairs outputs with
 // inputs by them too).
+//
+// A busy exhibit has a moment every few seconds (every red pile is one), so windows alone could keep
+// most of the day at full rate: about 4 GB an hour at 60 blocks. max_mb_per_hour bounds the whole
+// recording instead: a bucket that holds one hour's allowance, starts full, refills at that rate with
+// the events' own times, and pays for every event kept. Frames a window keeps beyond the reduced rate
+// are kept only while the bucket holds their bytes; the rest of the recording (every other channel,
+// the reduced rate) is always kept and pays too. So H hours take at most (H + 1) * max_mb_per_hour
+// while the thinned stream alone stays below the allowance; a window the allowance cannot pay for
+// falls back to the reduced rate and is counted (window_frames_refused), never silently. An operator's
+// mark is rare and asked for by a person (a visitor's complaint): its window is always kept whole.
 #pragma once
 
 #include <cstdint>
@@ -35,6 +45,7 @@ struct FramePolicyOptions {
   double after_s = 10;      // ... and this long after
   int64_t max_held_bytes = 256ll << 20;  // beyond this the oldest held events leave early (decided as they are)
   std::vector<std::string> answer_channels;  // thinned with the frame they answer (empty: kept whole)
+  double max_mb_per_hour = 0;  // with rate > 0: the recording's average bound (MB = 1e6 bytes); 0 = none
 };
 
 class RecordingPolicy {
@@ -45,8 +56,8 @@ class RecordingPolicy {
   bool thins() const { return options_.rate > 0; }
   // Takes an event (its utime is its arrival time).
   void offer(Event e);
-  // Full rate around utime from now on.
-  void moment(int64_t utime);
+  // Full rate around utime from now on; an exempt moment's window is kept whole whatever the allowance.
+  void moment(int64_t utime, bool exempt = false);
   // The events whose wait is over at now, in arrival order, frames decided; the others.
   std::vector<Event> release(int64_t now_utime);
   // Everything held (at stop): frames decided with the moments known.
@@ -55,6 +66,10 @@ class RecordingPolicy {
   int64_t frames_kept() const { return frames_kept_; }
   int64_t frames_thinned() const { return frames_thinned_; }
   int64_t answers_thinned() const { return answers_thinned_; }
+  // Frames inside a window thinned to the reduced rate because the hour's allowance was spent.
+  int64_t window_frames_refused() const { return window_frames_refused_; }
+  // Bytes the allowance holds now (negative after the always-kept stream overspent it); 0 without one.
+  double allowance_bytes() const { return allowance_; }
   int64_t held_bytes() const { return held_bytes_; }
   const FramePolicyOptions& options() const { return options_; }
 
@@ -62,17 +77,21 @@ class RecordingPolicy {
   using FrameKey = std::pair<int64_t, int64_t>;  // a frame's utime and frame_number
 
   void leave(std::vector<Event>& out);
-  bool keep_frame(int64_t utime);
+  bool keep_frame(int64_t utime, int64_t bytes);
+  void refill(int64_t utime);
+  void pay(int64_t bytes);
   bool is_answer(const std::string& channel) const;
   void remember_thinned(const FrameKey& key);
 
   FramePolicyOptions options_;
   int64_t before_us_, after_us_, period_us_;
   std::deque<Event> held_;
-  std::deque<int64_t> moments_;  // ascending
+  std::deque<int64_t> moments_, exempt_;  // ascending
   int64_t held_bytes_ = 0;
   int64_t last_kept_ = INT64_MIN;
-  int64_t frames_kept_ = 0, frames_thinned_ = 0, answers_thinned_ = 0;
+  int64_t frames_kept_ = 0, frames_thinned_ = 0, answers_thinned_ = 0, window_frames_refused_ = 0;
+  double capacity_ = 0, per_us_ = 0, allowance_ = 0;  // bytes, bytes per microsecond, bytes
+  int64_t refilled_at_ = INT64_MIN;
   // The frames thinned lately (answers come within a second or so of their frame; a bounded memory,
   // oldest forgotten first: an answer to a frame forgotten is kept).
   std::set<FrameKey> thinned_;
