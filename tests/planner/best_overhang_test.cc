@@ -102,6 +102,59 @@ TEST_CASE("the search grows the 19-block optimum into the 20-block one (the firs
   CHECK(s.residual < 1e-9);
 }
 
+TEST_CASE("from scratch, the default search reaches the shipped table at every n up to 15") {
+  // The shipped rows 1..30 must be reproducible from n = 1 by this tree. A beam of 6 (the width the table
+  // used to be made with) falls behind here: 2.08713 at n = 15 instead of 2.092896.
+  const nlohmann::json stacks = load(kData + "best_overhang_stacks.json");
+  const auto best = planner::search_best_overhang(15);
+  REQUIRE(best.size() == 15);
+  for (int n = 1; n <= 15; ++n) {
+    INFO("n = " << n);
+    CHECK(best[n - 1].blocks.size() == static_cast<size_t>(n));
+    CHECK(best[n - 1].overhang >= stacks.at(std::to_string(n)).at("overhang").get<double>() - 1e-6);
+    CHECK(best[n - 1].residual < 1e-9);
+  }
+}
+
+TEST_CASE("one block less: the shipped 23-block stack minus a block is the shipped 22-block optimum") {
+  const nlohmann::json stacks = load(kData + "best_overhang_stacks.json");
+  const auto s = planner::best_one_block_less(shipped_stack(stacks, 23));
+  REQUIRE(s);
+  CHECK(s->blocks.size() == 22);
+  CHECK(s->overhang >= stacks.at("22").at("overhang").get<double>() - 1e-6);
+  CHECK(s->residual < 1e-9);
+  CHECK_FALSE(planner::best_one_block_less(shipped_stack(stacks, 1)));
+}
+
+TEST_CASE("the search takes the best n stack minus a block for n-1 when that is better (shrink)") {
+  // Resumed at 21, growth alone (beam 1) reaches less than the shipped value at 22; the shipped 23-block
+  // stack, given as a start layout at 23, minus a block is better, and the search must take it for 22.
+  const nlohmann::json stacks = load(kData + "best_overhang_stacks.json");
+  const double shipped22 = stacks.at("22").at("overhang").get<double>();
+  planner::OverhangSearchOptions options;
+  options.beam = 1;
+  options.perturbations = 0;
+  options.wall_seeds = 0;
+  for (int n = 1; n <= 21; ++n) options.resume_from.push_back(shipped_stack(stacks, n));
+  options.start_layouts.resize(23);
+  options.start_layouts[22] = shipped_stack(stacks, 23);
+  std::vector<int> reported;
+  options.shrink = false;
+  const auto grown_only = planner::search_best_overhang(23, options);
+  REQUIRE(grown_only.size() == 23);
+  CHECK(grown_only[21].overhang < shipped22 - 1e-4);
+  options.shrink = true;
+  const auto best = planner::search_best_overhang(23, options, [&](int n, const planner::OverhangStack& s) {
+    if (n > 21) reported.push_back(n);
+    if (n == 22) CHECK(s.blocks.size() == 22);
+  });
+  REQUIRE(best.size() == 23);
+  CHECK(best[21].overhang >= shipped22 - 1e-6);
+  CHECK(best[22].overhang >= best[21].overhang);
+  for (int n = 1; n <= 21; ++n) CHECK(best[n - 1].overhang == options.resume_from[n - 1].overhang);  // kept as given
+  CHECK(reported == std::vector<int>{22, 22, 23});  // 22 again once 23 improved it, then 23
+}
+
 TEST_CASE("bad layouts get a clear error or no answer, never a crash") {
   CHECK_FALSE(planner::optimise_layout({}, 0));
   CHECK_THROWS_WITH(planner::optimise_layout({{0, -0.5}}, 1), Catch::Contains("target 1 out of range"));

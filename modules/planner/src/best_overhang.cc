@@ -641,7 +641,31 @@ OverhangStack improve_by_moves(OverhangStack best, int budget, double tolerance,
   return best;
 }
 
+// s with one more block lying on the surface far to the left: balanced, the same overhang.
+OverhangStack with_surface_block(OverhangStack s) {
+  double left = 0.0;
+  for (const PlacedBlock& b : s.blocks) left = std::min(left, b.x);
+  s.blocks.insert(s.blocks.begin(), PlacedBlock{0, left - 2.0});
+  return s;
+}
+
 }  // namespace
+
+std::optional<OverhangStack> best_one_block_less(const OverhangStack& s, double tolerance) {
+  std::optional<OverhangStack> best;
+  if (s.blocks.size() < 2) return best;
+  const int top = s.blocks.back().row;
+  for (size_t j = 0; j < s.blocks.size(); ++j) {
+    std::vector<PlacedBlock> rest = s.blocks;
+    const PlacedBlock removed = rest[j];
+    rest.erase(rest.begin() + static_cast<long>(j));
+    const bool alone = std::none_of(rest.begin(), rest.end(), [&](const PlacedBlock& b) { return b.row == removed.row; });
+    if (alone && removed.row != top) continue;  // the rows above would lose their support
+    auto result = optimise_layout(rest, rightmost(rest), tolerance);
+    if (result && (!best || result->overhang > best->overhang)) best = std::move(result);
+  }
+  return best;
+}
 
 std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchOptions& options,
                                                 const std::function<void(int, const OverhangStack&)>& progress) {
@@ -664,13 +688,23 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
     if (progress) progress(static_cast<int>(k + 1), best_per_n[k]);
   }
   beam.push_back(best_per_n.back());
+  const int first_new = static_cast<int>(best_per_n.size()) + 1;  // the first n this run computes
   for (int n = static_cast<int>(best_per_n.size()) + 1; n <= n_max; ++n) {
-    std::map<std::string, OverhangStack> found;
+    std::map<std::string, OverhangStack> found;  // the best layout of each row profile at this n
     auto consider = [&](const std::vector<PlacedBlock>& seed) {
       auto result = optimise_layout(seed, rightmost(seed), options.tolerance);
       if (!result) return;
       auto [it, inserted] = found.emplace(shape_key(*result), *result);
       if (!inserted && result->overhang > it->second.overhang) it->second = *result;
+    };
+    // Best first; equal overhangs keep the row profiles' order (std::sort leaves the order of equals to the
+    // library, and the beam search is path-dependent).
+    auto ranked_candidates = [&] {
+      std::vector<OverhangStack> out;
+      for (auto& [key, s] : found) out.push_back(s);
+      std::stable_sort(out.begin(), out.end(),
+                       [](const OverhangStack& a, const OverhangStack& b) { return a.overhang > b.overhang; });
+      return out;
     };
     for (const OverhangStack& s : beam)
       for (const auto& seed : grown(s.blocks)) consider(seed);
@@ -679,10 +713,7 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
     if (static_cast<size_t>(n) <= options.start_layouts.size() && !options.start_layouts[n - 1].blocks.empty())
       consider(options.start_layouts[n - 1].blocks);
     // Seeded restarts around the best few.
-    std::vector<OverhangStack> ranked;
-    for (auto& [key, s] : found) ranked.push_back(s);
-    std::sort(ranked.begin(), ranked.end(),
-              [](const OverhangStack& a, const OverhangStack& b) { return a.overhang > b.overhang; });
+    std::vector<OverhangStack> ranked = ranked_candidates();
     std::normal_distribution<double> noise(0.0, 0.08);
     const size_t top_few = std::min<size_t>(ranked.size(), 2);
     for (size_t i = 0; i < top_few; ++i)
@@ -691,10 +722,7 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
         for (PlacedBlock& b : seed) b.x += noise(rng);
         consider(sorted_blocks(seed));
       }
-    ranked.clear();
-    for (auto& [key, s] : found) ranked.push_back(s);
-    std::sort(ranked.begin(), ranked.end(),
-              [](const OverhangStack& a, const OverhangStack& b) { return a.overhang > b.overhang; });
+    ranked = ranked_candidates();
     // Polish the best: positions moved, so rebuild the contact set from them and optimise again.
     for (size_t i = 0; i < std::min<size_t>(ranked.size(), options.beam); ++i)
       for (int round = 0; round < 3; ++round) {
@@ -707,10 +735,7 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
     {
       // Always a candidate: the best of n-1 plus a block lying on the surface far to the left (still balanced),
       // so the table never decreases with n even when nothing better converges.
-      OverhangStack fallback = best_per_n.back();
-      double left = 0.0;
-      for (const PlacedBlock& b : fallback.blocks) left = std::min(left, b.x);
-      fallback.blocks.insert(fallback.blocks.begin(), PlacedBlock{0, left - 2.0});
+      const OverhangStack fallback = with_surface_block(best_per_n.back());
       auto at = std::find_if(ranked.begin(), ranked.end(),
                              [&](const OverhangStack& r) { return r.overhang < fallback.overhang; });
       ranked.insert(at, fallback);
@@ -721,7 +746,25 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
     }
     beam.assign(ranked.begin(), ranked.begin() + std::min<size_t>(ranked.size(), options.beam));
     best_per_n.push_back(beam.front());
-    if (progress) progress(n, beam.front());
+    if (options.shrink) {
+      // Back down: the best n stack minus a block may beat the best n-1 one, and that one minus a block the
+      // n-2 one, ... (only rows this run computed: resumed rows stay as given).
+      int lowest = n;
+      for (int k = n; k - 1 > first_new - 1 && k >= 2; --k) {
+        auto smaller = best_one_block_less(best_per_n[k - 1], options.tolerance);
+        if (!smaller || smaller->overhang <= best_per_n[k - 2].overhang + 1e-9) break;
+        best_per_n[k - 2] = *smaller;
+        lowest = k - 1;
+      }
+      // A row that improved may now beat the rows above it: they get it plus a block on the surface.
+      for (int k = lowest + 1; k <= n; ++k)
+        if (best_per_n[k - 1].overhang < best_per_n[k - 2].overhang)
+          best_per_n[k - 1] = with_surface_block(best_per_n[k - 2]);
+      if (best_per_n.back().overhang > beam.front().overhang) beam.insert(beam.begin(), best_per_n.back());
+      if (progress)
+        for (int k = lowest; k < n; ++k) progress(k, best_per_n[k - 1]);
+    }
+    if (progress) progress(n, best_per_n.back());
   }
   return best_per_n;
 }

@@ -24,6 +24,7 @@ int Main(int argc, char** argv) {
   flags.add("beam", "8", "layouts kept per n");
   flags.add("perturbations", "4", "seeded restarts around the best layouts per n");
   flags.add("wall-seeds", "6", "seeded brick-wall start layouts per n (n >= 8)");
+  flags.add("shrink", "true", "after each n, try the best n stack minus each block as the n-1 stack (and on down)");
   flags.add("moves", "0", "local improvement: one-block moves re-optimised per n (0 = off)");
   flags.add("seed", "1", "random seed of the restarts");
   flags.add("table", "best_overhang.json", "output: {\"n\": overhang} in block lengths");
@@ -42,6 +43,7 @@ int Main(int argc, char** argv) {
   options.perturbations = static_cast<int>(flags.get_int("perturbations"));
   options.wall_seeds = static_cast<int>(flags.get_int("wall-seeds"));
   options.moves = static_cast<int>(flags.get_int("moves"));
+  options.shrink = flags.get_bool("shrink");
   options.seed = static_cast<uint64_t>(flags.get_int("seed"));
   if (options.beam < 1 || options.perturbations < 0 || options.wall_seeds < 0 || options.moves < 0)
     throw FlagError("--beam must be >= 1; --perturbations, --wall-seeds and --moves >= 0");

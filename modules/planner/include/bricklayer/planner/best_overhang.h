@@ -47,10 +47,18 @@ std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& sta
 // Seeded brick-wall start layouts of n blocks with random row profiles (used by the search for n >= 8).
 std::vector<std::vector<PlacedBlock>> wall_layouts(int n, int count, uint64_t seed);
 
+// The best stack of one block less that s leaves: each block whose removal keeps a row under every other
+// row is taken away in turn and the rest re-optimised from their positions (nothing when none converges).
+// The beam grows layouts only upwards in n, and the best n-1 stack is sometimes the best n one minus a block.
+std::optional<OverhangStack> best_one_block_less(const OverhangStack& s, double tolerance = 1e-9);
+
 struct OverhangSearchOptions {
-  int beam = 6;           // layouts kept per n
+  int beam = 8;           // layouts kept per n
   int perturbations = 4;  // seeded random restarts around the best layouts per n
   int wall_seeds = 6;     // seeded brick-wall layouts with random row profiles per n (n >= 8)
+  // After each n: the best n stack minus one block (each block tried, re-optimised) replaces the best n-1 one
+  // when better, and so on down (rows of resume_from are never changed).
+  bool shrink = true;
   int moves = 0;           // local improvement: re-optimisations of one-block moves tried per n (n >= 4)
   uint64_t seed = 1;
   double tolerance = 1e-9;  // largest accepted constraint residual
