@@ -69,6 +69,29 @@ TEST_CASE("A calibration survives save and load exactly") {
   CHECK(cv::norm(board::camera_to_board(d, {380, 380}) - cv::Point2d(1, 1)) < 1e-9);
 }
 
+TEST_CASE("The board x accuracy is optional: written when stated, a file without it loads as not stated") {
+  // A file from before the scale step (or from before the key existed) has no board_x_accuracy.
+  const json old = valid_json();
+  CHECK_FALSE(old.contains("board_x_accuracy"));
+  const bricklayer::calibration_t c = board::parse_calibration_json(old.dump());
+  for (int i = 0; i < 3; ++i) CHECK(c.board_x_accuracy[i] == 0.0);
+  // Stated: written, and read back exactly.
+  bricklayer::calibration_t stated = c;
+  stated.board_x_accuracy[0] = 0.006;
+  stated.board_x_accuracy[1] = 0.0021;
+  stated.board_x_accuracy[2] = 0.0037;
+  const json j = json::parse(board::calibration_to_json(stated));
+  REQUIRE(j.contains("board_x_accuracy"));
+  CHECK(j["board_x_accuracy"].size() == 3);
+  const bricklayer::calibration_t back = board::parse_calibration_json(j.dump());
+  CHECK(back.board_x_accuracy[0] == 0.006);
+  CHECK(back.board_x_accuracy[1] == 0.0021);
+  CHECK(back.board_x_accuracy[2] == 0.0037);
+  // The bus carries it too (validate_calibration judges what vision receives).
+  stated.board_x_accuracy[2] = -1.0;
+  CHECK_THROWS_WITH(board::validate_calibration(stated), Catch::Contains("board_x_accuracy[2]"));
+}
+
 TEST_CASE("Every key is required and unknown keys are refused") {
   CHECK(error_of(valid_json()).empty());
   const json base = valid_json();
@@ -117,6 +140,9 @@ TEST_CASE("Bad values are rejected with a message naming them") {
       {"mean above max", [](json& j) { j["reprojection_error_mean_px"] = 2.0; }, "exceeds reprojection_error_max_px"},
       {"negative error", [](json& j) { j["reprojection_error_max_px"] = -1.0; }, "non-negative"},
       {"negative utime", [](json& j) { j["utime"] = -5; }, "utime must not be negative"},
+      {"accuracy short", [](json& j) { j["board_x_accuracy"] = {0.01, 0.002}; }, "\"board_x_accuracy\" must be an array of 3 numbers (got 2)"},
+      {"accuracy negative", [](json& j) { j["board_x_accuracy"] = {0.01, -0.002, 0.0}; }, "board_x_accuracy[1] = -0.002 outside 0..1"},
+      {"accuracy huge", [](json& j) { j["board_x_accuracy"] = {2.0, 0.0, 0.0}; }, "board_x_accuracy[0] = 2 outside 0..1"},
   };
   for (const Case& c : cases) {
     json j = valid_json();

@@ -332,6 +332,33 @@ TEST_CASE("the calibrate node corrects the board scale from blocks standing apar
   INFO("and up to " << worst_after << " after the correction");
   CHECK(worst_after < 0.01);  // measured 0.0069 (0.26 as calibrated)
   CHECK(worst_after < worst_before);
+
+  // The corrected calibration states how far board x may still be off, and the truth is within it over the
+  // whole board the camera sees (x -5..5 on rows 0, 3, 6 and 9), where the correction is extrapolated too.
+  const double* a = after.board_x_accuracy;
+  INFO("stated accuracy " << a[0] << " + " << a[1] << " |x| + " << a[2] << " y");
+  CHECK(a[0] > 0);
+  CHECK(a[1] > 0);
+  CHECK(a[2] > 0);
+  CHECK(before.board_x_accuracy[0] == 0);  // not stated before the scale step
+  const simcam::CameraSetup camera = simcam::CameraSetup::random(kSetupSeed);
+  const double h = camera.board.block_height_px / camera.board.block_length_px;
+  int points = 0, covered = 0;
+  double worst_ratio = 0;
+  for (int row : {0, 3, 6, 9})
+    for (double x = -5; x <= 5 + 1e-9; x += 0.5) {
+      const double y = (row + 0.5) * h;
+      const cv::Point2d p = simcam::rectified_to_camera(camera, {camera.board.to_px_x(x), camera.board.to_px_y(y)});
+      if (p.x < 2 || p.y < 2 || p.x > camera.size.width - 3 || p.y > camera.size.height - 3) continue;
+      const double error = std::abs(board::camera_to_board(after, p).x - x);
+      const double bound = a[0] + a[1] * std::abs(x) + a[2] * y;
+      ++points;
+      covered += error <= bound;
+      worst_ratio = std::max(worst_ratio, error / bound);
+    }
+  INFO(covered << " of " << points << " grid points within the stated bound; largest error / bound " << worst_ratio);
+  CHECK(points > 40);
+  CHECK(covered == points);
 }
 
 TEST_CASE("the calibrate node serves its file and self-checks on command only while the board is empty") {

@@ -159,6 +159,24 @@ TEST_CASE("the calibration floor is the reprojection residual carried from proje
   CHECK_THROWS_WITH(calibration_floor(c, 0, 0), Catch::Contains("singular"));
 }
 
+TEST_CASE("the calibration floor adds the board x accuracy the scale step states, growing along and up the board") {
+  calibration_t c = board::default_calibration();
+  c.reprojection_error_mean_px = 0.3;
+  const double residual = 0.3 / 96;
+  c.board_x_accuracy[0] = 0.006;
+  c.board_x_accuracy[1] = 0.004;
+  c.board_x_accuracy[2] = 0.01;
+  CHECK(calibration_floor(c, 0.0, 0.0) == Approx(residual + 0.006));
+  CHECK(calibration_floor(c, -4.0, 0.2) == Approx(residual + 0.006 + 0.016 + 0.002));
+  CHECK(calibration_floor(c, 4.5, 3.2) == Approx(residual + 0.006 + 0.018 + 0.032));
+  // A calibration stating a worse accuracy gives a larger floor, hence a larger published half-width.
+  calibration_t worse = c;
+  worse.board_x_accuracy[1] = 0.008;
+  CHECK(calibration_floor(worse, 4.5, 3.2) > calibration_floor(c, 4.5, 3.2) + 0.017);
+  CHECK(published_uncertainty(0.004, 0.0, 0.0, calibration_floor(worse, 4.5, 3.2), 0.0) >
+        published_uncertainty(0.004, 0.0, 0.0, calibration_floor(c, 4.5, 3.2), 0.0));
+}
+
 TEST_CASE("the published half-width is the measurement plus the lag, never below either floor") {
   CHECK(published_uncertainty(0.001, 0.0, 0.0, 0.0, 0.0) == 0.001);
   CHECK(published_uncertainty(0.001, 0.002, 0.0, 0.0, 0.0) == 0.002);   // the larger measurement

@@ -121,7 +121,21 @@ void check_all(const bricklayer::calibration_t& cal) {
   const double max = cal.reprojection_error_max_px;
   if (!std::isfinite(mean) || !std::isfinite(max) || mean < 0 || max < 0) fail("reprojection errors must be finite and non-negative");
   if (mean > max + 1e-9) fail("reprojection_error_mean_px (" + fmt(mean) + ") exceeds reprojection_error_max_px (" + fmt(max) + ")");
+  check_finite("board_x_accuracy", cal.board_x_accuracy, 3);
+  for (int i = 0; i < 3; ++i) {
+    // A bound of a block length or more per block length says nothing a knife-edge verdict could use.
+    if (cal.board_x_accuracy[i] < 0 || cal.board_x_accuracy[i] > 1)
+      fail("board_x_accuracy[" + std::to_string(i) + "] = " + fmt(cal.board_x_accuracy[i]) + " outside 0..1 block lengths");
+  }
 }
+
+bool accuracy_stated(const bricklayer::calibration_t& cal) {
+  return cal.board_x_accuracy[0] != 0 || cal.board_x_accuracy[1] != 0 || cal.board_x_accuracy[2] != 0;
+}
+
+// Optional: written only once the scale step stated it, so files without it (older ones, and every file
+// before the scale step) load as "not stated", and files of unscaled calibrations stay readable by older builds.
+constexpr const char* kAccuracyKey = "board_x_accuracy";
 
 const std::array<const char*, 16> kKeys = {
     "format", "version", "utime", "camera_width", "camera_height", "projector_width", "projector_height",
@@ -195,7 +209,7 @@ bricklayer::calibration_t parse_calibration_json(const std::string& text) {
   if (!j.is_object()) fail("top level must be a JSON object");
   const std::set<std::string> known(kKeys.begin(), kKeys.end());
   for (auto it = j.begin(); it != j.end(); ++it) {
-    if (!known.count(it.key())) fail("unknown key \"" + it.key() + "\" (expected exactly: format, version, utime, camera_width, ...)");
+    if (!known.count(it.key()) && it.key() != kAccuracyKey) fail("unknown key \"" + it.key() + "\" (expected exactly: format, version, utime, camera_width, ...)");
   }
   for (const char* key : kKeys) {
     if (!j.contains(key)) fail(std::string("missing key \"") + key + "\" (every key is required)");
@@ -218,6 +232,7 @@ bricklayer::calibration_t parse_calibration_json(const std::string& text) {
   cal.block_height = get_number(j.at("block_height"), "\"block_height\"");
   cal.reprojection_error_mean_px = get_number(j.at("reprojection_error_mean_px"), "\"reprojection_error_mean_px\"");
   cal.reprojection_error_max_px = get_number(j.at("reprojection_error_max_px"), "\"reprojection_error_max_px\"");
+  if (j.contains(kAccuracyKey)) get_array(j, kAccuracyKey, cal.board_x_accuracy, 3);
   check_all(cal);
   return cal;
 }
@@ -242,6 +257,7 @@ std::string calibration_to_json(const bricklayer::calibration_t& cal) {
   j["block_height"] = cal.block_height;
   j["reprojection_error_mean_px"] = cal.reprojection_error_mean_px;
   j["reprojection_error_max_px"] = cal.reprojection_error_max_px;
+  if (accuracy_stated(cal)) j[kAccuracyKey] = arr(cal.board_x_accuracy, 3);
   return j.dump(2) + "\n";
 }
 

@@ -25,6 +25,7 @@
 
 #include "bricklayer/calibration/calibrator.h"
 #include "bricklayer/calibration/line_lean.h"
+#include "bricklayer/calibration/board_x_accuracy.h"
 #include "bricklayer/board/mapping.h"
 #include "bricklayer/patterns/patterns.h"
 #include "bricklayer/common/flags.h"
@@ -49,6 +50,9 @@ struct Stats {
   std::vector<double> band_fixed[kBandCount], row_fixed[kRowCount], whole_fixed, band_raw[kBandCount];
   // The same after the lean of the end lines corrected the frame's vertical too (calibration/line_lean.h).
   std::vector<double> band_lean[kBandCount], row_lean[kRowCount], whole_lean;
+  // The stated accuracy (calibration/board_x_accuracy.h) against the truth: per setup the largest error / bound
+  // over the whole-board grid (<= 1: covered everywhere), and the bound at x = 5 on row 9.
+  std::vector<double> bound_ratio, bound_far;
 };
 
 
@@ -76,6 +80,19 @@ struct BoardXGrid {
   double row[kRowCount] = {0, 0, 0, 0};
   double whole = 0;
 };
+double bound_ratio(const calibration_t& c, const sim::CameraSetup& camera, const cal::BoardXAccuracy& bound) {
+  double worst = 0;
+  for (int r = 0; r < kRowCount; ++r) {
+    const double by = (kRows[r] + 0.5) * camera.board.block_height_px / camera.board.block_length_px;
+    for (double bx = -5; bx <= 5 + 1e-9; bx += 0.25) {
+      const cv::Point2d p = sim::rectified_to_camera(camera, {camera.board.to_px_x(bx), camera.board.to_px_y(by)});
+      if (p.x < 2 || p.y < 2 || p.x > camera.size.width - 3 || p.y > camera.size.height - 3) continue;
+      worst = std::max(worst, std::abs(board::camera_to_board(c, p).x - bx) / bound.at(bx, by));
+    }
+  }
+  return worst;
+}
+
 BoardXGrid board_x_grid(const calibration_t& c, const sim::CameraSetup& camera) {
   BoardXGrid g;
   for (int r = 0; r < kRowCount; ++r) {
@@ -280,8 +297,12 @@ int Main(int argc, char** argv) {
         corners.whole_fixed.push_back(grid.whole);
         std::string lean_why;
         if (const auto lean = cal::fit_frame_lean(leans, fit->scale, fit->keystone, 8, &lean_why)) {
-          const BoardXGrid g2 = board_x_grid(
-              cal::apply_frame_correction(result.calibration, fit->scale, fit->keystone, lean->shear, lean->vertical_keystone), camera);
+          const calibration_t leaned =
+              cal::apply_frame_correction(result.calibration, fit->scale, fit->keystone, lean->shear, lean->vertical_keystone);
+          const BoardXGrid g2 = board_x_grid(leaned, camera);
+          const cal::BoardXAccuracy bound = cal::board_x_accuracy(fit->residual, lean->residual);
+          corners.bound_ratio.push_back(bound_ratio(leaned, camera, bound));
+          corners.bound_far.push_back(bound.at(5.0, 9.5 * h));
           for (int b = 0; b < kBandCount; ++b) corners.band_lean[b].push_back(g2.band[b]);
           for (int r = 0; r < kRowCount; ++r) corners.row_lean[r].push_back(g2.row[r]);
           corners.whole_lean.push_back(g2.whole);
@@ -306,6 +327,9 @@ int Main(int argc, char** argv) {
         } else {
           // As bricklayer-calibrate does: the correction along the board only.
           std::printf("seed %d: frame lean not measured: %s\n", seed, lean_why.c_str());
+          const cal::BoardXAccuracy bound = cal::board_x_accuracy(fit->residual, -1.0);
+          corners.bound_ratio.push_back(bound_ratio(corrected, camera, bound));
+          corners.bound_far.push_back(bound.at(5.0, 9.5 * h));
           for (int b = 0; b < kBandCount; ++b) corners.band_lean[b].push_back(grid.band[b]);
           for (int r = 0; r < kRowCount; ++r) corners.row_lean[r].push_back(grid.row[r]);
           corners.whole_lean.push_back(grid.whole);
@@ -382,6 +406,13 @@ int Main(int argc, char** argv) {
       for (int r = 0; r < kRowCount; ++r)
         std::printf("  row %d (x -5..5): %.4f / %.4f\n", kRows[r], percentile(corners.row_lean[r], 0.5), percentile(corners.row_lean[r], 0.99));
       std::printf("  whole board: %.4f / %.4f\n", percentile(corners.whole_lean, 0.5), percentile(corners.whole_lean, 0.99));
+    }
+    if (!corners.bound_ratio.empty()) {
+      int covered = 0;
+      for (double r : corners.bound_ratio) covered += r <= 1.0;
+      std::printf("stated board x accuracy (calibration_t.board_x_accuracy): covers the whole-board grid in %d of %zu setups; largest error / bound median %.2f max %.2f; bound at x 5 row 9 median %.4f max %.4f\n",
+                  covered, corners.bound_ratio.size(), percentile(corners.bound_ratio, 0.5), percentile(corners.bound_ratio, 1.0),
+                  percentile(corners.bound_far, 0.5), percentile(corners.bound_far, 1.0));
     }
   }
   report("markers, centres only", centres, "fit");

@@ -1,4 +1,5 @@
 #include "bricklayer/calibration/calibrate_node.h"
+#include "bricklayer/calibration/board_x_accuracy.h"
 
 #include <opencv2/imgproc.hpp>
 
@@ -700,7 +701,13 @@ void CalibrateNode::finish_scale() {
     end_scale(0);
     return;
   }
-  calibration_t corrected = apply_frame_correction(*calibration_, fit->scale, fit->keystone, shear, vertical_keystone);
+  // What the correction leaves, stated with it for vision's uncertainty (board_x_accuracy.h).
+  const BoardXAccuracy accuracy = board_x_accuracy(fit->residual, lean ? lean->residual : -1.0);
+  set_value("board_x_accuracy_base", accuracy.base);
+  set_value("board_x_accuracy_per_x", accuracy.per_x);
+  set_value("board_x_accuracy_per_y", accuracy.per_y);
+  calibration_t corrected =
+      with_board_x_accuracy(apply_frame_correction(*calibration_, fit->scale, fit->keystone, shear, vertical_keystone), accuracy);
   corrected.utime = now();
   try {
     board::save_calibration(config_.output, corrected);

@@ -340,7 +340,13 @@ double temporal_uncertainty(double spread, int samples) {
   return student_t95(samples - 1) * spread;
 }
 
-double calibration_floor(const calibration_t& c, double x, double y) {
+// The bound the scale step states on board x (calibration_t.board_x_accuracy; 0 when not stated).
+double stated_accuracy(const calibration_t& c, double x, double y) {
+  const double* a = c.board_x_accuracy;
+  return a[0] + a[1] * std::abs(x) + a[2] * std::max(0.0, y);
+}
+
+double residual_floor(const calibration_t& c, double x, double y) {
   const double residual = c.reprojection_error_mean_px;
   if (!(residual > 0)) return 0.0;
   const cv::Matx33d cam_to_proj(c.camera_to_projector), cam_to_board(c.camera_to_board);
@@ -357,6 +363,12 @@ double calibration_floor(const calibration_t& c, double x, double y) {
   const double bx = (H(0, 0) * u + H(0, 1) * v + H(0, 2)) / w;
   const double dxu = (H(0, 0) - bx * H(2, 0)) / w, dxv = (H(0, 1) - bx * H(2, 1)) / w;
   return residual * std::hypot(dxu, dxv);
+}
+
+double calibration_floor(const calibration_t& c, double x, double y) {
+  // Both are the calibration's: the mapping's residual and the board frame's scale, independent errors
+  // that add.
+  return residual_floor(c, x, y) + stated_accuracy(c, x, y);
 }
 
 double published_uncertainty(double frame, double temporal, double lag, double calibration_floor, double operator_floor) {

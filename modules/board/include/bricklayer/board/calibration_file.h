@@ -8,7 +8,9 @@
 //   "camera_matrix" [fx, fy, cx, cy], "distortion" [k1, k2, p1, p2, k3],
 //   "camera_to_projector" [9], "camera_to_board" [9] (row-major, undistorted camera pixels),
 //   "colour_mixing" [9] (row-major, camera BGR per unit projector BGR), "ambient_bgr" [3],
-//   "block_height", "reprojection_error_mean_px", "reprojection_error_max_px".
+//   "block_height", "reprojection_error_mean_px", "reprojection_error_max_px";
+// and one optional key, "board_x_accuracy" [3] (calibration_t.board_x_accuracy), written only when stated
+// (not all zero): a file without it loads with the accuracy not stated.
 #pragma once
 
 #include <stdexcept>
@@ -27,7 +29,7 @@ class CalibrationFileError : public std::runtime_error {
 // a non-positive focal length, a principal point outside the image, a lens distortion that folds
 // over inside the image, a singular homography or one whose horizon crosses the camera image, a
 // singular or implausible colour mixing matrix, ambient outside 0..255, block height outside
-// (0, 10], negative or inconsistent reprojection errors.
+// (0, 10], negative or inconsistent reprojection errors, a board_x_accuracy term outside 0..1.
 void validate_calibration(const bricklayer::calibration_t& cal);
 
 // The uncalibrated default (board_geometry.h): a 640x480 camera with no lens distortion looking

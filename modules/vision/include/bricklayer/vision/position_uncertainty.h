@@ -15,7 +15,8 @@
 //     (a bound computed from the frame's printed line width and blur), never less than JPEG's floor.
 // The temporal filter adds the spread of the block's x over its recent frames (temporal_filter.h), and how far
 // the published x lags the latest measurement. The result is never below the calibration's residual
-// (calibration_t.reprojection_error_mean_px carried to board x through the calibration's own mappings) nor the
+// (calibration_t.reprojection_error_mean_px carried to board x through the calibration's own mappings, plus the
+// board x accuracy the scale step states, calibration_t.board_x_accuracy) nor the
 // operator's setting (VisionConfig "min-uncertainty").
 // The constants are calibrated on simcam frames against simcam's truth (tests/vision/position_uncertainty_
 // coverage_test.cc; figures in the vision README "Position uncertainty").
@@ -93,7 +94,8 @@ double temporal_uncertainty(double spread, int samples);
 // The calibration's residual as a half-width of board x (block lengths) at board point (x, y) in block lengths:
 // reprojection_error_mean_px is in projector pixels; the projector -> undistorted camera -> board mapping
 // (inverse camera_to_projector, then camera_to_board) gives how many block lengths of x one projector pixel is
-// there, in the direction that moves x most. 0 when the residual is 0 (e.g. board::default_calibration).
+// there, in the direction that moves x most; plus the bound the scale step states on board x there
+// (calibration_t.board_x_accuracy: [0] + [1] |x| + [2] y). 0 when both are 0 (e.g. board::default_calibration).
 // Throws std::invalid_argument for a singular camera_to_projector.
 double calibration_floor(const calibration_t& calibration, double x, double y);
 
