@@ -143,13 +143,15 @@ TEST_CASE("a device held open by another process is found through /proc (a camer
   const std::string node = test::write_file(dir / "video9", "");
   CHECK(doctor::processes_using(node).empty());
   harness::Program holder("/bin/sh", {"-c", "exec 3<" + node + " && exec sleep 30"});
+  // The shell opens the device and then becomes sleep: wait for the exec, or the name read is "sh".
+  const std::string expected = "sleep (pid " + std::to_string(holder.pid()) + ")";
   std::vector<std::string> users;
-  for (int i = 0; i < 100 && users.empty(); ++i) {
+  for (int i = 0; i < 250 && (users.size() != 1 || users[0] != expected); ++i) {
     usleep(20000);
     users = doctor::processes_using(node);
   }
   REQUIRE(users.size() == 1);
-  CHECK(users[0] == "sleep (pid " + std::to_string(holder.pid()) + ")");
+  CHECK(users[0] == expected);
   holder.stop();
   CHECK(doctor::processes_using(node).empty());
   fs::remove_all(dir);
