@@ -6,8 +6,7 @@
 #include <filesystem>
 #include <regex>
 
-#include <nlohmann/json.hpp>
-
+#include "harness/demo_profile.h"
 #include "harness/live_bus.h"
 #include "harness/program.h"
 #include "harness/scratch.h"
@@ -19,16 +18,10 @@ namespace fs = std::filesystem;
 TEST_CASE("the demo profile runs headless, stops by itself, and its log replays with 0 mismatches") {
   harness::ScratchDir dir("demo");
   // The shipped profile, with the log and the snapshots in a temporary folder instead of logs/.
-  nlohmann::json profile = nlohmann::json::parse(harness::read_file(harness::source_dir() / "launch/profiles/demo.json"));
-  profile["logger"]["file"] = (dir / "demo").string();
-  for (auto& m : profile["modules"])
-    for (auto& arg : m["command"])
-      if (arg == "logs/snapshots") arg = (dir / "snapshots").string();
-      else if (arg == "logs/rounds.json") arg = (dir / "rounds.json").string();
-  harness::write_file(dir / "demo.json", profile.dump(1));
+  const harness::DemoProfile demo = harness::scratch_demo_profile(dir);
 
   const harness::Ran launch = harness::run_program(
-      "bricklayer-launch", {"--root", BRICKLAYER_SOURCE_DIR, "--duration", "8", (dir / "demo.json").string()}, 60s,
+      "bricklayer-launch", {"--root", BRICKLAYER_SOURCE_DIR, "--duration", "8", demo.file.string()}, 60s,
       harness::ProgramOptions{{"DISPLAY=", "SDL_AUDIODRIVER=dummy", std::string("LCM_DEFAULT_URL=") + harness::kLiveUrl}, ""});
   REQUIRE_FALSE(launch.timed_out);
   const std::string& out = launch.out;

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "harness/demo_profile.h"
 #include "harness/live_bus.h"
 #include "harness/program.h"
 #include "harness/scratch.h"
@@ -18,23 +19,12 @@ namespace fs = std::filesystem;
 
 TEST_CASE("the demo plays a whole round by itself") {
   harness::ScratchDir dir("demo-round");
-  nlohmann::json profile = nlohmann::json::parse(harness::read_file(harness::source_dir() / "launch/profiles/demo.json"));
-  profile["logger"]["file"] = (dir / "demo").string();
-  bool has_book = false;
-  for (auto& m : profile["modules"])
-    for (auto& arg : m["command"]) {
-      if (arg == "logs/snapshots") arg = (dir / "snapshots").string();
-      if (arg == "logs/rounds.json") {
-        arg = (dir / "rounds.json").string();
-        has_book = true;
-      }
-    }
-  REQUIRE(has_book);  // the shipped profile keeps a round book
-  harness::write_file(dir / "demo.json", profile.dump(1));
+  const harness::DemoProfile demo = harness::scratch_demo_profile(dir);
+  REQUIRE(demo.has_round_book);  // the shipped profile keeps a round book
 
   // The first block at 2 s of the scenario, the round 2 s later, 20 s long: over by about 25 s.
   const harness::Ran launch = harness::run_program(
-      "bricklayer-launch", {"--root", BRICKLAYER_SOURCE_DIR, "--duration", "28", (dir / "demo.json").string()}, 120s,
+      "bricklayer-launch", {"--root", BRICKLAYER_SOURCE_DIR, "--duration", "28", demo.file.string()}, 120s,
       harness::ProgramOptions{{"DISPLAY=", "SDL_AUDIODRIVER=dummy", std::string("LCM_DEFAULT_URL=") + harness::kLiveUrl}, ""});
   REQUIRE_FALSE(launch.timed_out);
   INFO(launch.out << launch.err);

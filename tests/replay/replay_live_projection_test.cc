@@ -22,6 +22,7 @@
 #include "bricklayer/round_t.hpp"
 #include "bricklayer/runtime/codec.h"
 #include "bricklayer/runtime/log_file.h"
+#include "harness/demo_profile.h"
 #include "harness/live_bus.h"
 #include "harness/program.h"
 #include "harness/scratch.h"
@@ -39,16 +40,9 @@ namespace {
 const std::string& demo_log() {
   static harness::ScratchDir dir("replay-live-demo");
   static const std::string log = [] {
-    nlohmann::json profile =
-        nlohmann::json::parse(harness::read_file(harness::source_dir() / "launch/profiles/demo.json"));
-    profile["logger"]["file"] = (dir / "demo").string();
-    for (auto& m : profile["modules"])
-      for (auto& arg : m["command"])
-        if (arg == "logs/snapshots") arg = (dir / "snapshots").string();
-        else if (arg == "logs/rounds.json") arg = (dir / "rounds.json").string();
-    harness::write_file(dir / "demo.json", profile.dump(1));
+    const harness::DemoProfile demo = harness::scratch_demo_profile(dir);
     const harness::Ran launch = harness::run_program(
-        "bricklayer-launch", {"--root", BRICKLAYER_SOURCE_DIR, "--duration", "8", (dir / "demo.json").string()}, 60s,
+        "bricklayer-launch", {"--root", BRICKLAYER_SOURCE_DIR, "--duration", "8", demo.file.string()}, 60s,
         harness::ProgramOptions{{"DISPLAY=", "SDL_AUDIODRIVER=dummy", std::string("LCM_DEFAULT_URL=") + harness::kLiveUrl}, ""});
     INFO(launch.out << launch.err);
     REQUIRE_FALSE(launch.timed_out);
