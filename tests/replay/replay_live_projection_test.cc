@@ -77,7 +77,7 @@ std::vector<Stamp> replayed_stamps(const harness::ScratchDir& dir) {
     } else if (e.channel == channel(kProjectorImageChannel)) {
       if (auto im = runtime::decode<image_t>(e.data)) out.push_back({e.channel, im->frame_number, im->utime});
     } else if (e.channel == channel(kRoundChannel)) {
-      if (auto r = runtime::decode<round_t>(e.data)) out.push_back({e.channel, -1, r->utime});
+      if (auto round = runtime::decode<round_t>(e.data)) out.push_back({e.channel, -1, round->utime});
     }
   }
   return out;
