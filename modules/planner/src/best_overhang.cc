@@ -1,12 +1,16 @@
 #include "bricklayer/planner/best_overhang.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <exception>
+#include <functional>
 #include <map>
 #include <memory>
 #include <random>
 #include <set>
 #include <stdexcept>
+#include <thread>
 
 #include "bricklayer/core/program.h"
 
@@ -334,6 +338,43 @@ int rightmost(const std::vector<PlacedBlock>& blocks) {
   return best;
 }
 
+// Runs task(0..count-1) on up to jobs threads. Each task writes only its own result slot and callers consume
+// the slots in index order, so the search's answer does not depend on jobs (every optimisation owns its solver;
+// the random draws all happen before, on the calling thread).
+void for_each_index(size_t count, int jobs, const std::function<void(size_t)>& task) {
+  const size_t threads = std::min<size_t>(count, static_cast<size_t>(std::max(1, jobs)));
+  if (threads <= 1) {
+    for (size_t i = 0; i < count; ++i) task(i);
+    return;
+  }
+  std::atomic<size_t> next{0};
+  std::exception_ptr failure;
+  std::atomic<bool> failed{false};
+  auto work = [&] {
+    for (size_t i = next++; i < count && !failed; i = next++) {
+      try {
+        task(i);
+      } catch (...) {
+        if (!failed.exchange(true)) failure = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+}
+
+// optimise_layout of every layout (each towards its rightmost block), in the layouts' order.
+std::vector<std::optional<OverhangStack>> optimise_layouts(const std::vector<std::vector<PlacedBlock>>& layouts,
+                                                           double tolerance, int jobs) {
+  std::vector<std::optional<OverhangStack>> out(layouts.size());
+  for_each_index(layouts.size(), jobs,
+                 [&](size_t i) { out[i] = optimise_layout(layouts[i], rightmost(layouts[i]), tolerance); });
+  return out;
+}
+
 }  // namespace
 
 std::optional<OverhangStack> optimise_layout(const std::vector<PlacedBlock>& start_unsorted, int target,
@@ -651,19 +692,21 @@ OverhangStack with_surface_block(OverhangStack s) {
 
 }  // namespace
 
-std::optional<OverhangStack> best_one_block_less(const OverhangStack& s, double tolerance) {
+std::optional<OverhangStack> best_one_block_less(const OverhangStack& s, double tolerance, int jobs) {
   std::optional<OverhangStack> best;
   if (s.blocks.size() < 2) return best;
   const int top = s.blocks.back().row;
+  std::vector<std::vector<PlacedBlock>> layouts;
   for (size_t j = 0; j < s.blocks.size(); ++j) {
     std::vector<PlacedBlock> rest = s.blocks;
     const PlacedBlock removed = rest[j];
     rest.erase(rest.begin() + static_cast<long>(j));
     const bool alone = std::none_of(rest.begin(), rest.end(), [&](const PlacedBlock& b) { return b.row == removed.row; });
     if (alone && removed.row != top) continue;  // the rows above would lose their support
-    auto result = optimise_layout(rest, rightmost(rest), tolerance);
-    if (result && (!best || result->overhang > best->overhang)) best = std::move(result);
+    layouts.push_back(std::move(rest));
   }
+  for (auto& result : optimise_layouts(layouts, tolerance, jobs))
+    if (result && (!best || result->overhang > best->overhang)) best = std::move(result);
   return best;
 }
 
@@ -691,11 +734,13 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
   const int first_new = static_cast<int>(best_per_n.size()) + 1;  // the first n this run computes
   for (int n = static_cast<int>(best_per_n.size()) + 1; n <= n_max; ++n) {
     std::map<std::string, OverhangStack> found;  // the best layout of each row profile at this n
-    auto consider = [&](const std::vector<PlacedBlock>& seed) {
-      auto result = optimise_layout(seed, rightmost(seed), options.tolerance);
-      if (!result) return;
-      auto [it, inserted] = found.emplace(shape_key(*result), *result);
-      if (!inserted && result->overhang > it->second.overhang) it->second = *result;
+    // Optimises the seeds (on options.jobs threads) and files the answers in the seeds' order.
+    auto consider = [&](const std::vector<std::vector<PlacedBlock>>& seeds) {
+      for (auto& result : optimise_layouts(seeds, options.tolerance, options.jobs)) {
+        if (!result) continue;
+        auto [it, inserted] = found.emplace(shape_key(*result), *result);
+        if (!inserted && result->overhang > it->second.overhang) it->second = *result;
+      }
     };
     // Best first; equal overhangs keep the row profiles' order (std::sort leaves the order of equals to the
     // library, and the beam search is path-dependent).
@@ -706,30 +751,39 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
                        [](const OverhangStack& a, const OverhangStack& b) { return a.overhang > b.overhang; });
       return out;
     };
-    for (const OverhangStack& s : beam)
-      for (const auto& seed : grown(s.blocks)) consider(seed);
-    if (n >= 8)
-      for (const auto& seed : wall_seeds(n, options.wall_seeds, rng)) consider(seed);
-    if (static_cast<size_t>(n) <= options.start_layouts.size() && !options.start_layouts[n - 1].blocks.empty())
-      consider(options.start_layouts[n - 1].blocks);
+    {
+      std::vector<std::vector<PlacedBlock>> seeds;
+      for (const OverhangStack& s : beam)
+        for (auto& seed : grown(s.blocks)) seeds.push_back(std::move(seed));
+      if (n >= 8)
+        for (auto& seed : wall_seeds(n, options.wall_seeds, rng)) seeds.push_back(std::move(seed));
+      if (static_cast<size_t>(n) <= options.start_layouts.size() && !options.start_layouts[n - 1].blocks.empty())
+        seeds.push_back(options.start_layouts[n - 1].blocks);
+      consider(seeds);
+    }
     // Seeded restarts around the best few.
     std::vector<OverhangStack> ranked = ranked_candidates();
-    std::normal_distribution<double> noise(0.0, 0.08);
-    const size_t top_few = std::min<size_t>(ranked.size(), 2);
-    for (size_t i = 0; i < top_few; ++i)
-      for (int k = 0; k < options.perturbations; ++k) {
-        std::vector<PlacedBlock> seed = ranked[i].blocks;
-        for (PlacedBlock& b : seed) b.x += noise(rng);
-        consider(sorted_blocks(seed));
-      }
+    {
+      std::normal_distribution<double> noise(0.0, 0.08);
+      const size_t top_few = std::min<size_t>(ranked.size(), 2);
+      std::vector<std::vector<PlacedBlock>> seeds;
+      for (size_t i = 0; i < top_few; ++i)
+        for (int k = 0; k < options.perturbations; ++k) {
+          std::vector<PlacedBlock> seed = ranked[i].blocks;
+          for (PlacedBlock& b : seed) b.x += noise(rng);
+          seeds.push_back(sorted_blocks(seed));
+        }
+      consider(seeds);
+    }
     ranked = ranked_candidates();
     // Polish the best: positions moved, so rebuild the contact set from them and optimise again.
-    for (size_t i = 0; i < std::min<size_t>(ranked.size(), options.beam); ++i)
+    for_each_index(std::min<size_t>(ranked.size(), options.beam), options.jobs, [&](size_t i) {
       for (int round = 0; round < 3; ++round) {
         auto again = optimise_layout(ranked[i].blocks, rightmost(ranked[i].blocks), options.tolerance);
         if (!again || again->overhang <= ranked[i].overhang + 1e-9) break;
         ranked[i] = *again;
       }
+    });
     std::sort(ranked.begin(), ranked.end(),
               [](const OverhangStack& a, const OverhangStack& b) { return a.overhang > b.overhang; });
     {
@@ -751,7 +805,7 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
       // n-2 one, ... (only rows this run computed: resumed rows stay as given).
       int lowest = n;
       for (int k = n; k - 1 > first_new - 1 && k >= 2; --k) {
-        auto smaller = best_one_block_less(best_per_n[k - 1], options.tolerance);
+        auto smaller = best_one_block_less(best_per_n[k - 1], options.tolerance, options.jobs);
         if (!smaller || smaller->overhang <= best_per_n[k - 2].overhang + 1e-9) break;
         best_per_n[k - 2] = *smaller;
         lowest = k - 1;

@@ -2,9 +2,11 @@
 // (bricklayer/planner/best_overhang.h) and writes the table the score display reads
 // ({"1": 0.5, "2": 0.75, ...}) plus the stacks themselves (for verification and display).
 // Deterministic for a given --seed. Not a bus process.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -33,6 +35,7 @@ int Main(int argc, char** argv) {
   flags.add("resume", "", "stacks file of an earlier run: keep its results for n = 1..--resume-n and continue");
   flags.add("resume-n", "0", "with --resume: how many of its results to keep");
   flags.add("start-layouts", "", "stacks file of an earlier run: each of its stacks is one more start layout at its n");
+  flags.add("jobs", "0", "optimisations run at once, on threads (0 = one per core); the files do not depend on it");
   flags.add("log-level", "info", "debug, info, warn or error");
   if (!flags.parse(argc, argv)) return 0;
   log::set_level(log::parse_level(flags.get("log-level")));
@@ -47,6 +50,9 @@ int Main(int argc, char** argv) {
   options.seed = static_cast<uint64_t>(flags.get_int("seed"));
   if (options.beam < 1 || options.perturbations < 0 || options.wall_seeds < 0 || options.moves < 0)
     throw FlagError("--beam must be >= 1; --perturbations, --wall-seeds and --moves >= 0");
+  const int64_t jobs = flags.get_int("jobs");
+  if (jobs < 0 || jobs > 256) throw FlagError("--jobs must be between 0 and 256");
+  options.jobs = jobs > 0 ? static_cast<int>(jobs) : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   options.tolerance = flags.get_double("tolerance");
   if (!(options.tolerance > 0 && options.tolerance < 1e-3)) throw FlagError("--tolerance must be in (0, 1e-3)");
   // Stacks n = 1..count of a stacks file written by this program.

@@ -50,7 +50,8 @@ std::vector<std::vector<PlacedBlock>> wall_layouts(int n, int count, uint64_t se
 // The best stack of one block less that s leaves: each block whose removal keeps a row under every other
 // row is taken away in turn and the rest re-optimised from their positions (nothing when none converges).
 // The beam grows layouts only upwards in n, and the best n-1 stack is sometimes the best n one minus a block.
-std::optional<OverhangStack> best_one_block_less(const OverhangStack& s, double tolerance = 1e-9);
+// jobs: optimisations run at once (the answer is the same for any value).
+std::optional<OverhangStack> best_one_block_less(const OverhangStack& s, double tolerance = 1e-9, int jobs = 1);
 
 struct OverhangSearchOptions {
   int beam = 8;           // layouts kept per n
@@ -62,6 +63,9 @@ struct OverhangSearchOptions {
   int moves = 0;           // local improvement: re-optimisations of one-block moves tried per n (n >= 4)
   uint64_t seed = 1;
   double tolerance = 1e-9;  // largest accepted constraint residual
+  // Optimisations run at once, on threads. The answer does not depend on it: the random draws happen on the
+  // calling thread and the answers are taken in the order of their start layouts.
+  int jobs = 1;
   // Results already known for n = 1..k (e.g. from an earlier run's stacks file): the search continues at
   // n = k+1 with the last of them as its only layout.
   std::vector<OverhangStack> resume_from;
