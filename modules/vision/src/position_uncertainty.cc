@@ -340,12 +340,15 @@ double temporal_uncertainty(double spread, int samples) {
   return student_t95(samples - 1) * spread;
 }
 
+namespace {
+
 // The bound the scale step states on board x (calibration_t.board_x_accuracy; 0 when not stated).
 double stated_accuracy(const calibration_t& c, double x, double y) {
   const double* a = c.board_x_accuracy;
   return a[0] + a[1] * std::abs(x) + a[2] * std::max(0.0, y);
 }
 
+// The mapping's mean reprojection residual (projector px) carried to board x through the homography's slope.
 double residual_floor(const calibration_t& c, double x, double y) {
   const double residual = c.reprojection_error_mean_px;
   if (!(residual > 0)) return 0.0;
@@ -364,6 +367,8 @@ double residual_floor(const calibration_t& c, double x, double y) {
   const double dxu = (H(0, 0) - bx * H(2, 0)) / w, dxv = (H(0, 1) - bx * H(2, 1)) / w;
   return residual * std::hypot(dxu, dxv);
 }
+
+}  // namespace
 
 double calibration_floor(const calibration_t& c, double x, double y) {
   // Both are the calibration's: the mapping's residual and the board frame's scale, independent errors
