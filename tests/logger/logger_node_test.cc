@@ -143,6 +143,12 @@ TEST_CASE("a day's policy: frames thinned, full rate around a red block, the mom
   const int64_t frames_in = 600, predictions = 600;
   CHECK(node.policy().frames_kept() + node.policy().frames_thinned() == frames_in);
   REQUIRE(written(rig, node, predictions + node.policy().frames_kept()));
+  // Frames the policy left out were received: they are not losses (an exhibit recording all day thins
+  // most frames and must not read LOSING for it).
+  rig.run_for(1s);
+  CHECK(harness::heartbeat_value(node.heartbeat(), "sequence_gaps").value_or(-1) == 0);
+  CHECK(harness::heartbeat_value(node.heartbeat(), "frames_thinned").value_or(0) >= 400);
+  CHECK(node.heartbeat().status.rfind("LOSING", 0) != 0);
   std::vector<int64_t> frame_times;
   int64_t prediction_events = 0;
   for (const auto& e : read_log((dir / "day.00").string())) {

@@ -122,7 +122,7 @@ LoggerNode::LoggerNode(const Config& config, runtime::Bus& bus)
       budget_bytes_(static_cast<int64_t>(std::llround(config.budget_mb * 1024 * 1024))) {
   runtime::validate(config);
   check(config);
-  writer_ = std::make_unique<EventWriter>(writer_options(config), [this](const Event& e) { on_written(e); });
+  writer_ = std::make_unique<EventWriter>(writer_options(config));
   // One subscription sees everything; --channels / --exclude narrow it in wanted() (the same full
   // match), so what is skipped is counted. The queue only holds one burst: the handler copies.
   subscribe_bytes(".*", runtime::QueuePolicy::keep(size_t{1} << 20), [this](const runtime::Received& r) { on_message(r); },
@@ -166,15 +166,17 @@ void LoggerNode::on_message(const runtime::Received& r) {
     log::info("moment: ", m->kind, m->note.empty() ? "" : " (" + m->note + ")");
     writer_->note(std::move(*m));
   }
+  if (r.channel == image_channel_) observe_sequence(e);
   if (policy_.thins())
     policy_.offer(std::move(e));
   else
     writer_->push(std::move(e));
 }
 
-void LoggerNode::on_written(const Event& e) {
-  // Numbers that skip reveal messages lost before they reached us.
-  if (e.channel != image_channel_) return;
+void LoggerNode::observe_sequence(const Event& e) {
+  // Numbers that skip reveal messages lost before they reached us. Checked on arrival, before the
+  // recording policy: the frames it thins were received, and counting them would report a thinned day as
+  // lost frames (a dropped write is counted by the writer instead).
   image_t img{};
   if (img.decode(e.data.data(), 0, static_cast<int>(e.data.size())) < 0) return;  // logged as bytes anyway
   if (const int64_t skipped = sequence_.observe(e.channel, img.source, img.frame_number); skipped > 0)

@@ -142,7 +142,7 @@ class LoggerNode final : public runtime::Node {
  private:
   void on_message(const runtime::Received& r);
   bool wanted(const std::string& channel);
-  void on_written(const Event& e);  // the writer thread
+  void observe_sequence(const Event& e);  // a frame as it arrives (the bus thread)
   void update_figures();
 
   std::regex channels_;
@@ -159,7 +159,7 @@ class LoggerNode final : public runtime::Node {
   RecordingPolicy policy_;
   int64_t moments_seen_ = 0;
   int64_t budget_bytes_ = 0;
-  SequenceGaps sequence_;  // writer thread only
+  SequenceGaps sequence_;  // the bus thread only
   std::atomic<int64_t> gaps_{0}, source_restarts_{0};
   std::unique_ptr<EventWriter> writer_;  // last: its thread uses the members above, and stops first
 };
