@@ -22,6 +22,7 @@
 #include "bricklayer/calibration/calibrate_node.h"
 #include "bricklayer/calibration_t.hpp"
 #include "bricklayer/common/channels.h"
+#include "bricklayer/frames/image_codec.h"
 #include "bricklayer/projection/projection_node.h"
 #include "bricklayer/simcam/render.h"
 #include "bricklayer/simcam/simcam_node.h"
@@ -87,19 +88,9 @@ core::Stack stepped_pile() {
   return s;
 }
 
+// As simcam publishes frames: JPEG at quality 90.
 image_t jpeg_image(const cv::Mat& bgr, int64_t number) {
-  image_t img{};
-  std::vector<uint8_t> jpeg;
-  cv::imencode(".jpg", bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90});  // as simcam publishes frames
-  img.utime = 1000 + number * 33333;
-  img.frame_number = number;
-  img.width = bgr.cols;
-  img.height = bgr.rows;
-  img.format = image_t::FORMAT_JPEG;
-  img.source = "test";
-  img.data = jpeg;
-  img.size = static_cast<int32_t>(jpeg.size());
-  return img;
+  return frames::encode_image(bgr, image_t::FORMAT_JPEG, 1000 + number * 33333, number, "test", 90);
 }
 
 struct Coverage {

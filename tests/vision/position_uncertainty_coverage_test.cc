@@ -18,6 +18,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "bricklayer/common/channels.h"
+#include "bricklayer/frames/image_codec.h"
 #include "bricklayer/piles/random_pile.h"
 #include "bricklayer/projector_state_t.hpp"
 #include "bricklayer/simcam/render.h"
@@ -76,19 +77,9 @@ std::vector<Scene> scenes() {
   return s;
 }
 
+// As simcam publishes frames: JPEG at quality 90.
 image_t jpeg_image(const cv::Mat& bgr, int64_t number) {
-  image_t img{};
-  std::vector<uint8_t> jpeg;
-  cv::imencode(".jpg", bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90});  // as simcam publishes frames
-  img.utime = 1000 + number * 33333;
-  img.frame_number = number;
-  img.width = bgr.cols;
-  img.height = bgr.rows;
-  img.format = image_t::FORMAT_JPEG;
-  img.source = "test";
-  img.data = jpeg;
-  img.size = static_cast<int32_t>(jpeg.size());
-  return img;
+  return frames::encode_image(bgr, image_t::FORMAT_JPEG, 1000 + number * 33333, number, "test", 90);
 }
 
 double percentile(std::vector<double> v, double q) {
