@@ -9,6 +9,7 @@
 #include <memory>
 #include <random>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
 
@@ -711,12 +712,30 @@ std::optional<OverhangStack> best_one_block_less(const OverhangStack& s, double 
 }
 
 std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchOptions& options,
-                                                const std::function<void(int, const OverhangStack&)>& progress) {
+                                                const std::function<void(int, const OverhangStack&)>& progress,
+                                                const std::function<void(const OverhangSearchState&)>& checkpoint) {
   if (n_max < 1) throw std::invalid_argument("search_best_overhang: n_max must be at least 1");
   std::mt19937_64 rng(options.seed);
   std::vector<OverhangStack> best_per_n;
   std::vector<OverhangStack> beam;
-  if (options.resume_from.empty()) {
+  int first_new = 0;  // the first n this run computes; shrink leaves the rows below it alone
+  if (options.continue_from) {
+    if (!options.resume_from.empty())
+      throw std::invalid_argument("search_best_overhang: continue_from and resume_from exclude each other");
+    const OverhangSearchState& state = *options.continue_from;
+    best_per_n = state.best_per_n;
+    beam = state.beam;
+    first_new = state.first_new;
+    std::istringstream engine(state.rng);
+    engine >> rng;
+    if (!engine || best_per_n.empty() || beam.empty() || first_new < 2)
+      throw std::invalid_argument("search_best_overhang: continue_from is not a search's state (" +
+                                  std::string(!engine ? "unreadable random engine state" : "empty rows or beam") + ")");
+    for (const OverhangStack& s : beam)
+      if (s.blocks.size() != best_per_n.size())
+        throw std::invalid_argument("search_best_overhang: continue_from's beam does not hold " +
+                                    std::to_string(best_per_n.size()) + "-block layouts");
+  } else if (options.resume_from.empty()) {
     OverhangStack one;
     one.blocks = {{0, -0.5}};
     one.overhang = 0.5;
@@ -726,12 +745,14 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
   }
   for (size_t k = 0; k < best_per_n.size(); ++k) {
     if (best_per_n[k].blocks.size() != k + 1)
-      throw std::invalid_argument("search_best_overhang: resume_from[" + std::to_string(k) + "] does not have " +
+      throw std::invalid_argument("search_best_overhang: row " + std::to_string(k + 1) + " of the given stacks does not have " +
                                   std::to_string(k + 1) + " blocks");
     if (progress) progress(static_cast<int>(k + 1), best_per_n[k]);
   }
-  beam.push_back(best_per_n.back());
-  const int first_new = static_cast<int>(best_per_n.size()) + 1;  // the first n this run computes
+  if (!options.continue_from) {
+    beam.push_back(best_per_n.back());
+    first_new = static_cast<int>(best_per_n.size()) + 1;
+  }
   for (int n = static_cast<int>(best_per_n.size()) + 1; n <= n_max; ++n) {
     std::map<std::string, OverhangStack> found;  // the best layout of each row profile at this n
     // Optimises the seeds (on options.jobs threads) and files the answers in the seeds' order.
@@ -819,6 +840,11 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
         for (int k = lowest; k < n; ++k) progress(k, best_per_n[k - 1]);
     }
     if (progress) progress(n, best_per_n.back());
+    if (checkpoint) {
+      std::ostringstream engine;
+      engine << rng;
+      checkpoint({first_new, best_per_n, beam, engine.str()});
+    }
   }
   return best_per_n;
 }

@@ -53,6 +53,15 @@ std::vector<std::vector<PlacedBlock>> wall_layouts(int n, int count, uint64_t se
 // jobs: optimisations run at once (the answer is the same for any value).
 std::optional<OverhangStack> best_one_block_less(const OverhangStack& s, double tolerance = 1e-9, int jobs = 1);
 
+// Where a search stands after an n: everything the next n depends on, so that a run stopped after any n and
+// continued from this state writes byte for byte the files of a run that was never stopped.
+struct OverhangSearchState {
+  int first_new = 2;                      // the first n the run computed (shrink never changes rows below it)
+  std::vector<OverhangStack> best_per_n;  // index n-1, n = 1..the last n finished
+  std::vector<OverhangStack> beam;        // the layouts the next n grows from
+  std::string rng;                        // the random engine's state (std::mt19937_64 as operator<< writes it)
+};
+
 struct OverhangSearchOptions {
   int beam = 8;           // layouts kept per n
   int perturbations = 4;  // seeded random restarts around the best layouts per n
@@ -72,10 +81,17 @@ struct OverhangSearchOptions {
   // Extra start layouts, index n-1 (e.g. an earlier run's stacks file): each is re-optimised at its n as one
   // more candidate, so a run never ends below the layouts it was given (path-dependent beam searches differ).
   std::vector<OverhangStack> start_layouts;
+  // A state an earlier run reported (its checkpoint): the search goes on from there exactly as that run would
+  // have, given the same options. Excludes resume_from. Throws std::invalid_argument on a state that does not
+  // hold together (rows of the wrong size, an unreadable engine state).
+  std::optional<OverhangSearchState> continue_from;
 };
 
-// Best stacks for n = 1..n_max (index n-1). progress(n, best) is called after each n when given.
+// Best stacks for n = 1..n_max (index n-1). progress(n, best) is called after each n when given (again for a
+// row that shrink improved); checkpoint(state) after each n is finished, when given.
 std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchOptions& options = {},
-                                                const std::function<void(int, const OverhangStack&)>& progress = {});
+                                                const std::function<void(int, const OverhangStack&)>& progress = {},
+                                                const std::function<void(const OverhangSearchState&)>& checkpoint = {});
+
 
 }  // namespace bricklayer::planner
