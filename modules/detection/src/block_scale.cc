@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "bricklayer/detection/end_line_fit.h"
+
 namespace bricklayer::detection {
 
 namespace {
@@ -12,6 +14,8 @@ namespace {
 DetectorConfig widened(DetectorConfig config) {
   // Pairs of a mis-scaled board are up to kMaxScaleError of a length off; accept them (with margin).
   config.length_tolerance = std::max(config.length_tolerance, kMaxScaleError + 0.05);
+  config.keep_profiles = true;  // the end lines are placed again by fitting their profiles (end_line_fit.h),
+  config.keep_lines = true;     // in windows no other line of the row reaches into
   return config;
 }
 
@@ -148,13 +152,33 @@ int BlockScaleMeter::add(const cv::Mat& frame) {
     // Its own line is at distance 0; a block's two lines are never this close to each other.
     return std::count_if(ends.begin(), ends.end(), [&](double e) { return std::abs(e - line) < apart_px; }) > 1;
   };
+  // The row's profile, to place each end line by fitting it (end_line_fit.h) instead of by its dip's
+  // centroid, which blur pulls inwards. The window reaches 0.1 block lengths either side, less where
+  // another line is closer (it must not enter the window).
+  const Detection::Profile* profile = nullptr;
+  for (const Detection::Profile& p : d.profiles)
+    if (p.row == 0) profile = &p;
+  const double line_px = line_width_ * g.block_length_px;
+  auto refit = [&](double line) -> std::optional<double> {
+    if (!profile) return std::nullopt;
+    double nearest = 0.1 * g.block_length_px + 3.0;
+    for (const Detection::Line& other : d.line_list)
+      if (other.row == 0 && other.x_px != line) nearest = std::min(nearest, std::abs(other.x_px - line));
+    const auto fit = fit_end_line(profile->level, profile->leakage, line, line_px, std::max(4.0, nearest - 3.0));
+    return fit ? std::optional<double>(fit->centre) : std::nullopt;
+  };
   int added = 0;
   for (const DetectedBlock& b : d.blocks) {
     // A block not whole in view was paired from a line the camera saw and one it only guessed.
     if (b.row != 0 || !whole_in_view(b, frame.size()) || !(b.right_line_px > b.left_line_px) || crowded(b.left_line_px) ||
         crowded(b.right_line_px))
       continue;
-    measured_.push_back({(b.left_line_px - g.edge_x_px) / g.block_length_px, (b.right_line_px - g.edge_x_px) / g.block_length_px});
+    const auto left = refit(b.left_line_px), right = refit(b.right_line_px);
+    if (!left || !right) {
+      ++unfitted_;
+      continue;
+    }
+    measured_.push_back({(*left - g.edge_x_px) / g.block_length_px, (*right - g.edge_x_px) / g.block_length_px});
     ++added;
   }
   return added;

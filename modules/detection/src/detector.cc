@@ -277,6 +277,16 @@ Detection Detector::detect(const cv::Mat& frame) {
     cv::reduce(rect.rowRange(band.y1, band.y2), lo_m, 0, cv::REDUCE_AVG, CV_32F);
     float* up = up_m.ptr<float>();
     float* lo = lo_m.ptr<float>();
+    if (config_.keep_profiles) {
+      Detection::Profile& profile = out.profiles.emplace_back();
+      profile.row = band.row;
+      profile.level.resize(static_cast<size_t>(n));
+      for (int x = 0; x < n; ++x) profile.level[static_cast<size_t>(x)] = 0.5f * (up[x] + lo[x]);
+      if (leak_valid_) {
+        profile.leakage.resize(static_cast<size_t>(n));
+        for (int x = 0; x < n; ++x) profile.leakage[static_cast<size_t>(x)] = 0.5f * (leak_up_[bi][x] + leak_lo_[bi][x]);
+      }
+    }
     if (leak_valid_) {
       for (int x = 0; x < n; ++x) {
         up[x] = std::max(0.0f, up[x] - leak_up_[bi][x]);

@@ -40,6 +40,7 @@ struct DetectorConfig {
   // End-line width in block lengths, used only when a frame has too few separate blocks to measure it.
   double line_width = 1.0 / 40.0;
   bool keep_lines = false;         // fill Detection::line_list (diagnostics)
+  bool keep_profiles = false;      // fill Detection::profiles (the block-scale measurement fits end lines in them)
 };
 
 struct DetectedBlock {
@@ -66,6 +67,15 @@ struct Detection {
     double x_px, depth;  // centroid in the rectified frame; darkness relative to the background
   };
   std::vector<Line> line_list;        // every accepted line (only with DetectorConfig::keep_lines)
+  // Per row band (only with DetectorConfig::keep_profiles): the green level across the rectified frame,
+  // averaged over the band's height (less its margins), as the camera saw it, and the projector's
+  // predicted leakage into it averaged alike (empty without a projector image): what the lines were found
+  // in (level - leakage), before any normalisation.
+  struct Profile {
+    int row;
+    std::vector<float> level, leakage;
+  };
+  std::vector<Profile> profiles;
 };
 
 // Sets left_px and the camera-pixel corners of a block from its row and x.
