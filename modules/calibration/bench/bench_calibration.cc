@@ -25,6 +25,7 @@
 
 #include "bricklayer/calibration/calibrator.h"
 #include "bricklayer/calibration/line_lean.h"
+#include "bricklayer/calibration/board_frame_refit.h"
 #include "bricklayer/calibration/board_x_accuracy.h"
 #include "bricklayer/board/mapping.h"
 #include "bricklayer/patterns/patterns.h"
@@ -53,6 +54,12 @@ struct Stats {
   // The stated accuracy (calibration/board_x_accuracy.h) against the truth: per setup the largest error / bound
   // over the whole-board grid (<= 1: covered everywhere), and the bound at x = 5 on row 9.
   std::vector<double> bound_ratio, bound_far;
+  // After the second pass (calibration/board_frame_refit.h: every row measured again in the first pass's
+  // frame): per x band, per row, per band and row, the whole grid; the stated bound's coverage; the scale's
+  // error against the truth (measured a / true a - 1) after the first pass and after the second.
+  std::vector<double> band_refit[kBandCount], row_refit[kRowCount], cell_refit[kBandCount][kRowCount], whole_refit;
+  std::vector<double> refit_bound_ratio, refit_bound_far, scale_error_first, scale_error_refit;
+  int refit_failed = 0;
 };
 
 
@@ -78,6 +85,7 @@ double board_x_error(const calibration_t& c, const sim::CameraSetup& camera) {
 struct BoardXGrid {
   double band[kBandCount] = {0, 0, 0, 0, 0};
   double row[kRowCount] = {0, 0, 0, 0};
+  double cell[kBandCount][kRowCount] = {};
   double whole = 0;
 };
 double bound_ratio(const calibration_t& c, const sim::CameraSetup& camera, const cal::BoardXAccuracy& bound) {
@@ -105,7 +113,7 @@ BoardXGrid board_x_grid(const calibration_t& c, const sim::CameraSetup& camera) 
       g.row[r] = std::max(g.row[r], e);
       g.whole = std::max(g.whole, e);
       for (int b = 0; b < kBandCount; ++b)
-        if (bx >= kBands[b][0] - 1e-9 && bx <= kBands[b][1] + 1e-9) g.band[b] = std::max(g.band[b], e);
+        if (bx >= kBands[b][0] - 1e-9 && bx <= kBands[b][1] + 1e-9) g.band[b] = std::max(g.band[b], e), g.cell[b][r] = std::max(g.cell[b][r], e);
     }
   }
   return g;
@@ -116,6 +124,21 @@ core::Stack blocks_apart(int frame) {
   const double d = 0.011 * frame;
   core::Stack s;
   s.blocks = {{1, 0, -3.5 + d}, {2, 0, -2.1 - d}, {3, 0, -0.7 + d}, {4, 0, 0.6 - d}, {5, 1, -3.2 + d}};
+  return s;
+}
+
+// The same bottom row with two towers on it (--towers): on the blocks at -3.5 and -0.7, one block on
+// another up to row `top`, each a few hundredths off the one below as hands leave them.
+core::Stack towers(int frame, int top) {
+  const double d = 0.011 * frame;
+  core::Stack s;
+  s.blocks = {{1, 0, -3.5 + d}, {2, 0, -2.1 - d}, {3, 0, -0.7 + d}, {4, 0, 0.6 - d}};
+  int id = 5;
+  for (int row = 1; row <= top; ++row) {
+    const double jitter = 0.03 * ((row * 7) % 5 - 2) / 2.0;
+    s.blocks.push_back({id++, row, -3.5 + d + jitter});
+    s.blocks.push_back({id++, row, -0.7 + d - jitter});
+  }
   return s;
 }
 
@@ -213,6 +236,8 @@ int Main(int argc, char** argv) {
   flags.add_bool("square-projector", "the projector mounted square (simcam's default: the shelf top just below the bottom marker row) instead of ProjectorSetup::random");
   flags.add("shelf-clearance", "8", "camera px: markers with a corner this close to the shelf are left out (0 = keep all)");
   flags.add_bool("verbose", "print the board x error of every setup");
+  flags.add("towers", "0", "blocks stand in two towers up to this row on the bottom row's blocks at -3.5 and -0.7 (0: the bottom row alone)");
+  flags.add("max-row", "12", "the second pass measures blocks on rows 0..this");
   flags.add_bool("gray-code", "also measure a dense Gray-code map (32 more frames per setup; slow)");
   if (!flags.parse(argc, argv)) return 0;
   const int setups = static_cast<int>(flags.get_int("setups"));
@@ -270,9 +295,12 @@ int Main(int argc, char** argv) {
       corners.board_x.push_back(worst_x);
       detection::BlockScaleMeter meter(result.calibration);
       std::vector<cal::LineLean> leans;
+      std::vector<cal::RefitFrame> stored;
       const double h = result.calibration.block_height;
       for (int f = 0; f < 10; ++f) {
-        const cv::Mat frame = renderer.render(blocks_apart(f), nuisance, nullptr, seed * 100 + 50 + f).bgr;
+        const int top = static_cast<int>(flags.get_int("towers"));
+        const cv::Mat frame = renderer.render(top > 0 ? towers(f, top) : blocks_apart(f), nuisance, nullptr, seed * 100 + 50 + f).bgr;
+        stored.push_back({frame, cv::Mat(), cv::Size()});
         const size_t before = meter.measured().size();
         meter.add(frame);
         cv::Mat grey;
@@ -295,10 +323,25 @@ int Main(int argc, char** argv) {
         for (int b = 0; b < kBandCount; ++b) corners.band_fixed[b].push_back(grid.band[b]), corners.band_raw[b].push_back(raw.band[b]);
         for (int r = 0; r < kRowCount; ++r) corners.row_fixed[r].push_back(grid.row[r]);
         corners.whole_fixed.push_back(grid.whole);
+        // The correction the truth asks for: the homography from the calibration's board frame to the true one.
+        std::vector<cv::Point2d> from, to;
+        for (double by = 0; by <= 3.2; by += 0.4)
+          for (double bx = -4; bx <= 4; bx += 0.5) {
+            const cv::Point2d cam = sim::rectified_to_camera(camera, {camera.board.to_px_x(bx), camera.board.to_px_y(by)});
+            from.push_back(board::camera_to_board(result.calibration, cam));
+            to.emplace_back(bx, by);
+          }
+        cv::Mat t = cv::findHomography(from, to, 0);
+        t /= t.at<double>(2, 2);
+        cal::FrameCorrection first;
+        first.scale = fit->scale;
+        first.keystone = fit->keystone;
         std::string lean_why;
-        if (const auto lean = cal::fit_frame_lean(leans, fit->scale, fit->keystone, 8, &lean_why)) {
-          const calibration_t leaned =
-              cal::apply_frame_correction(result.calibration, fit->scale, fit->keystone, lean->shear, lean->vertical_keystone);
+        const auto lean = cal::fit_frame_lean(leans, fit->scale, fit->keystone, 8, &lean_why);
+        if (lean) {
+          first.shear = lean->shear;
+          first.vertical_keystone = lean->vertical_keystone;
+          const calibration_t leaned = first.apply(result.calibration);
           const BoardXGrid g2 = board_x_grid(leaned, camera);
           const cal::BoardXAccuracy bound = cal::board_x_accuracy(fit->residual, lean->residual);
           corners.bound_ratio.push_back(bound_ratio(leaned, camera, bound));
@@ -306,21 +349,6 @@ int Main(int argc, char** argv) {
           for (int b = 0; b < kBandCount; ++b) corners.band_lean[b].push_back(g2.band[b]);
           for (int r = 0; r < kRowCount; ++r) corners.row_lean[r].push_back(g2.row[r]);
           corners.whole_lean.push_back(g2.whole);
-          if (verbose) {
-            // The correction the truth asks for: the homography from the calibration's board frame to the true one.
-            std::vector<cv::Point2d> from, to;
-            for (double by = 0; by <= 3.2; by += 0.4)
-              for (double bx = -4; bx <= 4; bx += 0.5) {
-                const cv::Point2d cam = sim::rectified_to_camera(camera, {camera.board.to_px_x(bx), camera.board.to_px_y(by)});
-                from.push_back(board::camera_to_board(result.calibration, cam));
-                to.emplace_back(bx, by);
-              }
-            cv::Mat t = cv::findHomography(from, to, 0);
-            t /= t.at<double>(2, 2);
-            std::printf("seed %d: truth a %.4f b %.4f / d %.4f e %.4f / g %.5f h %.5f; measured a %.4f b %.4f g %.5f h %.5f\n", seed,
-                        t.at<double>(0, 0), t.at<double>(0, 1), t.at<double>(1, 0), t.at<double>(1, 1), t.at<double>(2, 0), t.at<double>(2, 1),
-                        fit->scale, lean->shear, fit->keystone, lean->vertical_keystone);
-          }
           if (verbose)
             std::printf("seed %d: lean of %d end lines (%d dropped, residual %.4f): shear %.4f vertical keystone %.5f; whole board %.4f, rows %.4f %.4f %.4f %.4f\n",
                         seed, lean->lines, lean->outliers, lean->residual, lean->shear, lean->vertical_keystone, g2.whole, g2.row[0], g2.row[1], g2.row[2], g2.row[3]);
@@ -333,6 +361,42 @@ int Main(int argc, char** argv) {
           for (int b = 0; b < kBandCount; ++b) corners.band_lean[b].push_back(grid.band[b]);
           for (int r = 0; r < kRowCount; ++r) corners.row_lean[r].push_back(grid.row[r]);
           corners.whole_lean.push_back(grid.whole);
+        }
+        corners.scale_error_first.push_back(first.scale / t.at<double>(0, 0) - 1.0);
+        // The second pass: the same frames measured again on every row in the first pass's frame.
+        const calibration_t first_calibration = first.apply(result.calibration);
+        std::string refit_why;
+        const auto refit = cal::refit_board_frame(first_calibration, stored, static_cast<int>(flags.get_int("max-row")), 20, 0.01, &refit_why);
+        // What bricklayer-calibrate --scale-from-blocks does: the second pass where blocks stand on rows up the
+        // board, else the first pass stands.
+        if (!refit) {
+          if (verbose) std::printf("seed %d: no second pass: %s\n", seed, refit_why.c_str());
+          ++corners.refit_failed;
+        }
+        {
+          const cal::FrameCorrection total = refit ? refit->correction.after(first) : first;
+          const calibration_t final_calibration = total.apply(result.calibration);
+          const BoardXGrid g3 = board_x_grid(final_calibration, camera);
+          for (int b = 0; b < kBandCount; ++b) {
+            corners.band_refit[b].push_back(g3.band[b]);
+            for (int r = 0; r < kRowCount; ++r) corners.cell_refit[b][r].push_back(g3.cell[b][r]);
+          }
+          for (int r = 0; r < kRowCount; ++r) corners.row_refit[r].push_back(g3.row[r]);
+          corners.whole_refit.push_back(g3.whole);
+          corners.scale_error_refit.push_back(total.scale / t.at<double>(0, 0) - 1.0);
+          const cal::BoardXAccuracy bound =
+              refit ? cal::board_x_accuracy(refit->lengths.residual, refit->lean ? refit->lean->residual : -1.0, true)
+                    : cal::board_x_accuracy(fit->residual, lean ? lean->residual : -1.0);
+          corners.refit_bound_ratio.push_back(bound_ratio(final_calibration, camera, bound));
+          corners.refit_bound_far.push_back(bound.at(5.0, 9.5 * h));
+          if (verbose && refit)
+            std::printf("seed %d: truth a %.4f b %.4f / d %.4f e %.4f / g %.5f h %.5f; first pass a %.4f b %.4f g %.5f h %.5f; second a %.4f b %.4f g %.5f h %.5f "
+                        "(first residual %.4f%%; %d blocks to row %d, height span %.2f, length residual %.4f%%, %d leans residual %.4f%s); whole board %.4f, rows %.4f %.4f %.4f %.4f\n",
+                        seed, t.at<double>(0, 0), t.at<double>(0, 1), t.at<double>(1, 0), t.at<double>(1, 1), t.at<double>(2, 0), t.at<double>(2, 1),
+                        first.scale, first.shear, first.keystone, first.vertical_keystone, total.scale, total.shear, total.keystone,
+                        total.vertical_keystone, 100 * fit->residual, refit->lengths.blocks, refit->highest_row, refit->height_span, 100 * refit->lengths.residual,
+                        refit->lean ? refit->lean->lines : 0, refit->lean ? refit->lean->residual : -1.0, refit->lean ? "" : (" refused: " + refit->lean_why).c_str(),
+                        g3.whole, g3.row[0], g3.row[1], g3.row[2], g3.row[3]);
         }
         if (verbose)
           std::printf("seed %d: whole board (x -5..5, rows 0/3/6/9) worst %.4f; by band %.4f %.4f %.4f %.4f %.4f (scale %.4f keystone %.5f)\n",
@@ -406,6 +470,35 @@ int Main(int argc, char** argv) {
       for (int r = 0; r < kRowCount; ++r)
         std::printf("  row %d (x -5..5): %.4f / %.4f\n", kRows[r], percentile(corners.row_lean[r], 0.5), percentile(corners.row_lean[r], 0.99));
       std::printf("  whole board: %.4f / %.4f\n", percentile(corners.whole_lean, 0.5), percentile(corners.whole_lean, 0.99));
+    }
+    if (!corners.whole_refit.empty()) {
+      std::printf("board x over the whole board after the scale step (bricklayer-calibrate --scale-from-blocks: the second pass, every row "
+                  "measured again, in %zu of %zu setups; the first pass where no blocks stand up the board), median / p99:\n",
+                  corners.whole_refit.size() - corners.refit_failed, corners.whole_refit.size());
+      for (int b = 0; b < kBandCount; ++b) {
+        std::printf("  x %+.0f..%+.0f (rows 0, 3, 6, 9): %.4f / %.4f   by row", kBands[b][0], kBands[b][1], percentile(corners.band_refit[b], 0.5),
+                    percentile(corners.band_refit[b], 0.99));
+        for (int r = 0; r < kRowCount; ++r)
+          std::printf("  %d: %.4f / %.4f", kRows[r], percentile(corners.cell_refit[b][r], 0.5), percentile(corners.cell_refit[b][r], 0.99));
+        std::printf("\n");
+      }
+      for (int r = 0; r < kRowCount; ++r)
+        std::printf("  row %d (x -5..5): %.4f / %.4f\n", kRows[r], percentile(corners.row_refit[r], 0.5), percentile(corners.row_refit[r], 0.99));
+      std::printf("  whole board: %.4f / %.4f\n", percentile(corners.whole_refit, 0.5), percentile(corners.whole_refit, 0.99));
+      std::vector<double> abs_first, abs_refit;
+      for (double e : corners.scale_error_first) abs_first.push_back(std::abs(e));
+      for (double e : corners.scale_error_refit) abs_refit.push_back(std::abs(e));
+      double mean_first = 0, mean_refit = 0;
+      for (double e : corners.scale_error_first) mean_first += e / corners.scale_error_first.size();
+      for (double e : corners.scale_error_refit) mean_refit += e / corners.scale_error_refit.size();
+      std::printf("scale a against the truth (measured / true - 1): first pass mean %+.3f%%, |error| median %.3f%% max %.3f%%; after the scale step mean %+.3f%%, |error| median %.3f%% max %.3f%%\n",
+                  100 * mean_first, 100 * percentile(abs_first, 0.5), 100 * percentile(abs_first, 1.0), 100 * mean_refit,
+                  100 * percentile(abs_refit, 0.5), 100 * percentile(abs_refit, 1.0));
+      int covered = 0;
+      for (double r : corners.refit_bound_ratio) covered += r <= 1.0;
+      std::printf("stated board x accuracy after the scale step: covers the whole-board grid in %d of %zu setups; largest error / bound median %.2f max %.2f; bound at x 5 row 9 median %.4f max %.4f\n",
+                  covered, corners.refit_bound_ratio.size(), percentile(corners.refit_bound_ratio, 0.5), percentile(corners.refit_bound_ratio, 1.0),
+                  percentile(corners.refit_bound_far, 0.5), percentile(corners.refit_bound_far, 1.0));
     }
     if (!corners.bound_ratio.empty()) {
       int covered = 0;

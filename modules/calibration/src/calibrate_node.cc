@@ -1,5 +1,6 @@
 #include "bricklayer/calibration/calibrate_node.h"
 #include "bricklayer/calibration/board_x_accuracy.h"
+#include "bricklayer/calibration/board_frame_refit.h"
 
 #include <opencv2/imgproc.hpp>
 
@@ -280,6 +281,7 @@ void CalibrateNode::on_projector(const projector_state_t& s) {
       return;
     }
     scale_->set_projector_image(shown, {calibration_->projector_width, calibration_->projector_height});
+    scale_projector_image_ = shown;
   }
 }
 
@@ -404,6 +406,7 @@ void CalibrateNode::start_calibration() {
 
 void CalibrateNode::start_scale() {
   scale_ = std::make_unique<detection::BlockScaleMeter>(*calibration_);
+  scale_projector_image_.release();
   scale_started_utime_ = now();
   scale_seen_ = scale_frames_ = 0;
   scale_by_frame_.clear();
@@ -611,6 +614,8 @@ void CalibrateNode::measure_scale(const image_t& m) {
   const double h = calibration_->block_height;
   ScaleFrame frame;
   frame.blocks = blocks;
+  frame.bgr = bgr;
+  frame.projector_image = scale_projector_image_;
   for (size_t i = before; i < scale_->measured().size(); ++i) {
     frame.lines.push_back(scale_->measured()[i]);
     for (double x : {scale_->measured()[i].left, scale_->measured()[i].right})
@@ -637,14 +642,16 @@ void CalibrateNode::finish_scale() {
   }
   std::vector<detection::EndLines> lines;
   std::vector<LineLean> leans;
+  std::vector<RefitFrame> frames;
   int kept = 0;
   std::ostringstream seen;
-  for (const auto& [count, frames] : counts) seen << (seen.tellp() > 0 ? ", " : "") << count << " in " << frames;
+  for (const auto& [count, frames_counted] : counts) seen << (seen.tellp() > 0 ? ", " : "") << count << " in " << frames_counted;
   for (const ScaleFrame& f : scale_by_frame_) {
     if (f.blocks != expected) continue;
     ++kept;
     lines.insert(lines.end(), f.lines.begin(), f.lines.end());
     leans.insert(leans.end(), f.leans.begin(), f.leans.end());
+    frames.push_back({f.bgr, f.projector_image, {calibration_->projector_width, calibration_->projector_height}});
   }
   scale_by_frame_.clear();
   set_value("scale_frames_used", kept);
@@ -661,6 +668,7 @@ void CalibrateNode::finish_scale() {
   if (kept < config_.scale_frames)
     log::info("blocks counted per frame: ", seen.str(), " frames; measuring the ", kept, " that count ", expected);
 
+  // First pass: the bottom row's lengths and the lean of its end lines.
   std::string why;
   const std::optional<detection::BoardCorrection> fit = detection::fit_board_correction(
       lines, detection::DetectorConfig{}.line_width, 2 * kept, config_.scale_max_residual, &why);
@@ -672,16 +680,42 @@ void CalibrateNode::finish_scale() {
   }
   std::string lean_why;
   const std::optional<FrameLean> lean = fit_frame_lean(leans, fit->scale, fit->keystone, 2 * kept, &lean_why);
-  const double shear = lean ? lean->shear : 0.0;
-  const double vertical_keystone = lean ? lean->vertical_keystone : 0.0;
   if (!lean) log::warn("the lean of the board's vertical not measured (", lean_why, "): corrected along the board only");
-  const double change =
-      std::max(fit->max_change(kScaleCheckHalfWidth), frame_correction_change(fit->scale, fit->keystone, shear, vertical_keystone,
-                                                                              kScaleCheckHalfWidth, kScaleCheckHeight));
-  set_value("scale", fit->scale);
-  set_value("keystone", fit->keystone);
-  set_value("shear", shear);
-  set_value("vertical_keystone", vertical_keystone);
+  FrameCorrection first;
+  first.scale = fit->scale;
+  first.keystone = fit->keystone;
+  first.shear = lean ? lean->shear : 0.0;
+  first.vertical_keystone = lean ? lean->vertical_keystone : 0.0;
+  // Second pass: the same frames in the first pass's frame, every row (board_frame_refit.h). Refused (no
+  // blocks on rows up the board, or too few agree), the first pass stands.
+  FrameCorrection total = first;
+  double length_residual = fit->residual, lean_residual = lean ? lean->residual : -1.0;
+  bool vertical_from_rows = false;
+  std::string refit_text = "second pass refused";
+  std::string refit_why;
+  if (const auto refit = refit_board_frame(first.apply(*calibration_), frames, config_.scale_max_row, 2 * kept,
+                                           config_.scale_max_residual, &refit_why)) {
+    total = refit->correction.after(first);
+    length_residual = refit->lengths.residual;
+    vertical_from_rows = refit->height_span >= detection::kMinHeightForVerticalKeystone;
+    if (!refit->lean) log::warn("second pass: the lean of the board's vertical not measured (", refit->lean_why, "): no shear");
+    lean_residual = refit->lean ? refit->lean->residual : -1.0;
+    std::ostringstream t;
+    t.precision(4);
+    t << "second pass: " << refit->lengths.blocks << " blocks on rows up to " << refit->highest_row << " (residual "
+      << 100 * refit->lengths.residual << "%" << (vertical_from_rows ? ", the vertical keystone from their lengths" : "") << ")";
+    refit_text = t.str();
+    set_value("scale_highest_row", refit->highest_row);
+  } else {
+    log::info("no second pass of the board scale (", refit_why, "): the first pass's correction stands");
+  }
+  const double change = std::max(detection::BoardCorrection{total.scale, total.keystone}.max_change(kScaleCheckHalfWidth),
+                                 frame_correction_change(total.scale, total.keystone, total.shear, total.vertical_keystone,
+                                                         kScaleCheckHalfWidth, kScaleCheckHeight));
+  set_value("scale", total.scale);
+  set_value("keystone", total.keystone);
+  set_value("shear", total.shear);
+  set_value("vertical_keystone", total.vertical_keystone);
   set_value("block_length", fit->length_at(0.0));
   set_value("blocks_measured", fit->blocks);
   set_value("correction_max_change", change);
@@ -690,11 +724,12 @@ void CalibrateNode::finish_scale() {
   text << "blocks read " << fit->length_at(-2.0) << ", " << fit->length_at(0.0) << " and " << fit->length_at(2.0)
        << " block lengths long 2 lengths left of the edge, at it and 2 right of it (" << fit->blocks << " measurements, "
        << fit->outliers << " dropped, residual " << 100 * fit->residual << "%); end lines lean "
-       << (lean ? std::to_string(lean->lines) + " measured: shear " + std::to_string(shear) + ", vertical keystone " +
-                      std::to_string(vertical_keystone)
+       << (lean ? std::to_string(lean->lines) + " measured: shear " + std::to_string(lean->shear) + ", vertical keystone " +
+                      std::to_string(lean->vertical_keystone)
                 : std::string("not measured"))
-       << "; the correction moves points within " << kScaleCheckHalfWidth << " lengths of the edge and "
-       << kScaleCheckHeight << " above the surface by up to " << change;
+       << "; " << refit_text << "; scale " << total.scale << ", keystone " << total.keystone << ", shear " << total.shear
+       << ", vertical keystone " << total.vertical_keystone << "; the correction moves points within " << kScaleCheckHalfWidth
+       << " lengths of the edge and " << kScaleCheckHeight << " above the surface by up to " << change;
   if (change < config_.scale_min_change) {
     log::info(text.str(), ": below --scale-min-change ", config_.scale_min_change, ", ", config_.output, " left as it is");
     set_status("ok: scale already right");
@@ -702,12 +737,11 @@ void CalibrateNode::finish_scale() {
     return;
   }
   // What the correction leaves, stated with it for vision's uncertainty (board_x_accuracy.h).
-  const BoardXAccuracy accuracy = board_x_accuracy(fit->residual, lean ? lean->residual : -1.0);
+  const BoardXAccuracy accuracy = board_x_accuracy(length_residual, lean_residual, vertical_from_rows);
   set_value("board_x_accuracy_base", accuracy.base);
   set_value("board_x_accuracy_per_x", accuracy.per_x);
   set_value("board_x_accuracy_per_y", accuracy.per_y);
-  calibration_t corrected =
-      with_board_x_accuracy(apply_frame_correction(*calibration_, fit->scale, fit->keystone, shear, vertical_keystone), accuracy);
+  calibration_t corrected = with_board_x_accuracy(total.apply(*calibration_), accuracy);
   corrected.utime = now();
   try {
     board::save_calibration(config_.output, corrected);

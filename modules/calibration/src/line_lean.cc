@@ -133,6 +133,49 @@ std::optional<FrameLean> fit_frame_lean(const std::vector<LineLean>& leans, doub
   return out;
 }
 
+std::optional<FrameLean> fit_shear(const std::vector<LineLean>& leans, double a, double g, double h, int min_lines,
+                                   std::string* why, double max_residual) {
+  auto fail = [&](const std::string& text) -> std::optional<FrameLean> {
+    if (why) *why = text;
+    return std::nullopt;
+  };
+  if (static_cast<int>(leans.size()) < std::max(1, min_lines))
+    return fail("measured the lean of " + std::to_string(leans.size()) + " end lines, need " + std::to_string(min_lines));
+  const auto shear_of = [&](const LineLean& l) { return a * (l.x * h - l.lean * (h * l.y + 1)) / (g * l.x + 1 - l.lean * g * l.y); };
+  const auto lean_of = [&](const LineLean& l, double b) {
+    const double n = a * l.x + b * l.y, d = g * l.x + h * l.y + 1;
+    return (n * h - b * d) / (a * d - n * g);
+  };
+  std::vector<double> shears;
+  for (const LineLean& l : leans) shears.push_back(shear_of(l));
+  const double mid = median(shears);
+  std::vector<double> dev;
+  for (const LineLean& l : leans) dev.push_back(std::abs(l.lean - lean_of(l, mid)));
+  const double mad = std::max(1e-4, median(dev));
+  double sum = 0;
+  std::vector<LineLean> kept;
+  for (const LineLean& l : leans)
+    if (std::abs(l.lean - lean_of(l, mid)) <= 4 * 1.4826 * mad) kept.push_back(l), sum += shear_of(l);
+  if (static_cast<int>(kept.size()) < std::max(1, min_lines))
+    return fail("the leans of the end lines disagree (" + std::to_string(kept.size()) + " of " + std::to_string(leans.size()) +
+                " agree, need " + std::to_string(min_lines) + ")");
+  FrameLean out;
+  out.shear = sum / static_cast<double>(kept.size());
+  out.vertical_keystone = h;
+  out.lines = static_cast<int>(kept.size());
+  out.outliers = static_cast<int>(leans.size() - kept.size());
+  double ss = 0;
+  for (const LineLean& l : kept) ss += std::pow(l.lean - lean_of(l, out.shear), 2);
+  out.residual = std::sqrt(ss / static_cast<double>(kept.size()));
+  if (out.residual > max_residual) {
+    char text[160];
+    std::snprintf(text, sizeof text, "the end lines' leans scatter by %.3f RMS about the fit (at most %.3f): shadows or blur on the lines?",
+                  out.residual, max_residual);
+    return fail(text);
+  }
+  return out;
+}
+
 calibration_t apply_frame_correction(const calibration_t& calibration, double a, double g, double b, double h) {
   if (!(a > 0.0) || !std::isfinite(a) || !std::isfinite(g) || !std::isfinite(b) || !std::isfinite(h))
     throw std::invalid_argument("apply_frame_correction: scale must be positive and finite, the other terms finite");

@@ -25,14 +25,18 @@ struct BoardXAccuracy {
 };
 
 inline constexpr double kAccuracyBase = 0.006;         // the origin's p99 from the shelf (mild), block lengths
-inline constexpr double kAccuracyScale = 0.004;        // the scale's blur bias (up to 0.36%, strong) with margin
-inline constexpr double kAccuracyLean = 0.008;         // shear and vertical keystone from leans, per block length up
+inline constexpr double kAccuracyScale = 0.0025;       // the scale and the keystone along the board, per block length out
+inline constexpr double kAccuracyLean = 0.006;         // shear and vertical keystone from bottom-row leans, per block length up
+inline constexpr double kAccuracyRows = 0.002;         // the vertical keystone from lengths on rows up the board, per block length up
 inline constexpr double kAccuracyNoLean = 0.05;        // the vertical uncorrected, per block length up
 inline constexpr double kAccuracyResidualFactor = 2.0; // per unit of the fits' RMS residuals
+inline constexpr double kAccuracyRowsLeanFactor = 0.5; // per unit of the leans' RMS residual when h came from the rows
 
 // The bound from the scale step's fits: `length_residual` is BoardCorrection::residual (relative), and
 // `lean_residual` FrameLean::residual, negative when the lean was not measured (corrected along the board only).
-BoardXAccuracy board_x_accuracy(double length_residual, double lean_residual);
+// `vertical_from_rows`: the vertical keystone came from block lengths on rows spanning
+// detection::kMinHeightForVerticalKeystone or more (board_frame_refit.h), the leans gave the shear alone.
+BoardXAccuracy board_x_accuracy(double length_residual, double lean_residual, bool vertical_from_rows = false);
 
 // The calibration stating it (calibration_t.board_x_accuracy).
 calibration_t with_board_x_accuracy(const calibration_t& calibration, const BoardXAccuracy& accuracy);

@@ -21,9 +21,12 @@
 //                 its board frame over --scale-frames camera frames (detection/block_scale.h: the board's
 //                 scale comes from the projector and is off when the projector is not mounted square),
 //                 correct the board frame (scale and keystone along the board, and from the lean of the
-//                 blocks' end lines its shear and vertical keystone: calibration/line_lean.h), save and
-//                 publish (exit 0), or say what to fix (exit 1). Only frames that count --scale-blocks
-//                 blocks (default: the count most frames agree on) are measured.
+//                 blocks' end lines its shear and vertical keystone: calibration/line_lean.h), then measure
+//                 the same frames again in the corrected frame on every row up to --scale-max-row (blocks
+//                 standing in towers on them give the vertical keystone from their lengths:
+//                 calibration/board_frame_refit.h) and correct it once more, save and publish (exit 0), or
+//                 say what to fix (exit 1). Only frames that count --scale-blocks bottom-row blocks
+//                 (default: the count most frames agree on) are measured.
 //   --serve       load --output, publish it (again every --republish seconds, so late starters catch
 //                 up; re-read when the file changes, e.g. after --scale-from-blocks; a missing or bad
 //                 file is waited for, not fatal: the launcher starts --serve before anyone calibrated),
@@ -85,6 +88,7 @@ struct CalibrateConfig {
   int scale_blocks = 0;
   double scale_max_residual = 0.01;
   double scale_min_change = 0.02;
+  int scale_max_row = 12;
 
   template <typename Visitor>
   void visit(Visitor& v) {
@@ -132,8 +136,8 @@ struct CalibrateConfig {
     v(runtime::param("write-default", write_default,
                      "write the uncalibrated default setup (modules/board) to --output and exit"));
     v(runtime::param("scale-from-blocks", scale_from_blocks,
-                     "correct the saved calibration's board scale from 3+ blocks standing apart on the bottom row, "
-                     "save, publish and exit"));
+                     "correct the saved calibration's board scale from 3+ blocks standing apart on the bottom row "
+                     "(best with a tower of blocks on two of them, up to row 9 or higher), save, publish and exit"));
     v(runtime::param("scale-frames", scale_frames, "--scale-from-blocks: camera frames to measure").range(1, 1000));
     v(runtime::param("scale-blocks", scale_blocks,
                      "--scale-from-blocks: how many blocks stand apart on the bottom row (frames counting otherwise "
@@ -149,6 +153,10 @@ struct CalibrateConfig {
                           .range(0, 1);
     min_change.max_open = true;  // [0, 1)
     v(min_change);
+    v(runtime::param("scale-max-row", scale_max_row,
+                     "--scale-from-blocks: the second pass measures blocks standing apart in their row on rows 0..this "
+                     "(towers of blocks on the bottom row's blocks: the scale up the board measured, not extrapolated)")
+          .range(0, 30));
   }
 
   // "WIDTHxHEIGHT" with both in 16..16384: "" when it is one, else why not.
@@ -205,6 +213,7 @@ class CalibrateNode final : public runtime::Node {
     int blocks = 0;
     std::vector<detection::EndLines> lines;
     std::vector<LineLean> leans;
+    cv::Mat bgr, projector_image;  // kept for the second pass (board_frame_refit.h)
   };
 
   void on_projector(const projector_state_t& s);
@@ -251,6 +260,7 @@ class CalibrateNode final : public runtime::Node {
   int64_t last_sequence_ = 0;
   std::filesystem::file_time_type file_time_{};
   std::unique_ptr<detection::BlockScaleMeter> scale_;
+  cv::Mat scale_projector_image_;  // what the projector shows now (--scale-from-blocks with the game running)
   int64_t scale_started_utime_ = 0;
   int scale_seen_ = 0;    // frames received in --scale-from-blocks
   int scale_frames_ = 0;  // frames measured

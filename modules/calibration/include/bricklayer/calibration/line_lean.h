@@ -28,10 +28,12 @@
 
 namespace bricklayer::calibration {
 
-// One end line: where it stands (board x in the calibration's frame) and its lean dx/dy.
+// One end line: where it stands (board x in the calibration's frame, and the height it was measured at:
+// its row band's middle) and its lean dx/dy.
 struct LineLean {
   double x = 0.0;
   double lean = 0.0;
+  double y = 0.0;
 };
 
 // The lean of the dark end line near board x between heights y0 < y1 (block lengths, the calibration's
@@ -57,6 +59,14 @@ inline constexpr double kMaxLeanResidual = 0.03;
 std::optional<FrameLean> fit_frame_lean(const std::vector<LineLean>& leans, double scale, double keystone, int min_lines,
                                         std::string* why, double min_span_for_keystone = 2.0,
                                         double max_residual = kMaxLeanResidual);
+
+// The shear b alone, given a, g and h (h from block lengths on several rows, block_scale.h), from leans
+// measured at any height: a vertical line at (x, y) leans by (N h - b D) / (a D - N g) with N = a x + b y,
+// D = g x + h y + 1, so each lean gives b = a (x h - lean (h y + 1)) / (g x + 1 - lean g y); leans more than
+// 4 robust deviations off dropped, the rest averaged. The result's vertical_keystone is h as given; its
+// residual is the leans' RMS about the fit. Nothing, with *why, as fit_frame_lean.
+std::optional<FrameLean> fit_shear(const std::vector<LineLean>& leans, double scale, double keystone, double vertical_keystone,
+                                   int min_lines, std::string* why, double max_residual = kMaxLeanResidual);
 
 // The calibration with camera_to_board := C * camera_to_board, C = [a b 0; 0 a 0; g h 1].
 // Throws std::invalid_argument unless a > 0 and all are finite.

@@ -7,13 +7,17 @@
 // lines are one block length less one line width apart (each line's centroid lies half a line width
 // inside its end). Blocks standing apart on the bottom row, spread along it, measure how long a block
 // reads at each place, and fit_board_correction() finds the board correction
-//     x' = a x / (c x + 1),  y' = a y / (c x + 1)
+//     x' = a x / (c x + h y + 1),  y' = a y / (c x + h y + 1)
 // (a homography fixing the surface edge, the origin the shelf sets whatever the scale): a is the scale,
-// c a keystone along the board. apply_board_correction() puts it into the calibration.
+// c a keystone along the board, h one up it (how the scale changes with height; only from blocks on rows
+// spanning kMinHeightForVerticalKeystone or more). apply_board_correction() puts it into the calibration.
 //
-// Only the bottom row is used: a wrong scale shifts row k's band by the error times k, and the bottom row
-// stays inside its band for errors up to kMaxScaleError. Only blocks at least kMinGap from their
-// neighbours: the end lines of touching blocks merge, and their centroids are not half a width inside.
+// By default only the bottom row is measured: a wrong scale shifts row k's band by the error times k, and
+// the bottom row stays inside its band for errors up to kMaxScaleError. Once a first correction has put
+// the bands right, a meter on the corrected calibration may measure every row up to `max_row` (blocks on
+// higher rows: the vertical keystone from their lengths, interpolated instead of extrapolated up the
+// board). Only blocks at least kMinGap from their row's other lines: the end lines of touching blocks
+// merge, and their centroids are not half a width inside.
 //
 // Each end line is placed by fitting its profile (end_line_fit.h), not at its dip's centroid: blur mixes
 // the glass-to-face step beside the line into the dip and pulled the centroid inwards (lengths 0.05-0.25%
@@ -40,19 +44,24 @@ inline constexpr double kMaxScaleError = 0.25;  // largest measurable |block len
 inline constexpr double kMinGap = 0.1;          // block lengths between a measured block's end lines and any other
 inline constexpr double kMaxKeystone = 0.08;    // largest |c| searched, per block length
 inline constexpr double kMinSpanForKeystone = 2.0;  // block lengths the measured blocks must span to fit c
+inline constexpr double kMinHeightForVerticalKeystone = 1.0;  // block lengths of height they must span to fit h
 
-// One measured block: its end-line centroids in board coordinates of the calibration being checked.
+// One measured block: its end lines in board coordinates of the calibration being checked, and the height
+// of its row band's middle there.
 struct EndLines {
   double left = 0.0, right = 0.0;
+  double y = 0.0;
+  int row = 0;
 };
 
 struct BoardCorrection {
   double scale = 1.0;     // a: true block lengths per board unit at the surface edge
   double keystone = 0.0;  // c: per block length (0 when the blocks span less than kMinSpanForKeystone)
+  double vertical_keystone = 0.0;  // h: per block length up (0 unless their heights span kMinHeightForVerticalKeystone)
   int blocks = 0;         // measurements used (after dropping outliers)
   int outliers = 0;       // measurements dropped (mispaired lines, more than 3% off the fit)
   double residual = 0.0;  // RMS of the corrected block lengths' relative error
-  double length_at(double x) const;  // how long a block read at board x before the correction
+  double length_at(double x) const;  // how long a block read at board x on the bottom row before the correction
   double max_change(double half_width) const;  // largest |x' - x| over |x| <= half_width, block lengths
 };
 
@@ -66,13 +75,14 @@ class BlockScaleMeter {
  public:
   // `config.line_width` is the blocks' physical end-line width in block lengths (1/40 for the exhibit's
   // blocks and simcam's). Throws std::invalid_argument on an unusable calibration.
-  explicit BlockScaleMeter(const calibration_t& calibration, DetectorConfig config = {});
+  // Rows 0..max_row are measured (see above: only 0 before a first correction).
+  explicit BlockScaleMeter(const calibration_t& calibration, DetectorConfig config = {}, int max_row = 0);
 
   // What the projector shows (the game's red and blue light on the blocks): its leakage into green is
   // subtracted from the following frames, as in bricklayer-vision (Detector::set_projector_image).
   void set_projector_image(const cv::Mat& bgr, cv::Size projector_size) { detector_.set_projector_image(bgr, projector_size); }
 
-  // Measures the bottom-row blocks standing apart in one camera frame (BGR8 or GRAY8); returns how many.
+  // Measures the blocks standing apart in one camera frame (BGR8 or GRAY8); returns how many.
   int add(const cv::Mat& frame);
 
   const std::vector<EndLines>& measured() const { return measured_; }
@@ -83,13 +93,14 @@ class BlockScaleMeter {
 
  private:
   double line_width_;
+  int max_row_;
   Detector detector_;
   std::vector<EndLines> measured_;
   int unfitted_ = 0;
 };
 
 // The calibration with its board coordinates corrected: camera_to_board := C * camera_to_board with
-// C = [a 0 0; 0 a 0; c 0 1]. Throws std::invalid_argument unless scale > 0 and both are finite.
+// C = [a 0 0; 0 a 0; c h 1]. Throws std::invalid_argument unless scale > 0 and both are finite.
 calibration_t apply_board_correction(const calibration_t& calibration, const BoardCorrection& correction);
 
 }  // namespace bricklayer::detection
