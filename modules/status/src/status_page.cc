@@ -59,7 +59,7 @@ constexpr const char* kPage = R"HTML(<!DOCTYPE html>
     <button data-action="check_calibration">Check the calibration</button>
     <button data-action="calibrate" data-confirm="Calibrate now? The board must be empty: once it has been empty for 5 s the projector shows calibration patterns instead of the game for about 5 s.">Calibrate now</button>
   </div>
-  <div><button data-action="calibrate" data-step="scale-from-blocks" data-confirm="Correct the board scale now? Three or more blocks must stand apart on the bottom row, spread along it (the game may go on); the camera measures them for a few seconds.">Correct the scale with blocks</button></div>
+  <div><button data-action="calibrate" data-step="scale-from-blocks" data-confirm="Correct the board scale now? Three or more blocks must stand apart on the bottom row, spread along it (the game may go on); for the whole board, also stand a tower of blocks, one on another up to row 9 or higher, on two of them. The camera measures them for a few seconds.">Correct the scale with blocks</button></div>
   <div id="calibration" class="muted">Calibration: nothing heard from bricklayer-calibrate --serve yet.</div>
   <div><label>Display condition for the next round
     <select id="condition-choice"><option value="proposed">proposed (only the blocks that start the fall red)</option>
