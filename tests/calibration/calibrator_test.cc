@@ -244,6 +244,32 @@ TEST_CASE("The board frame: exact with a square projector, shelf-anchored with a
   }
 }
 
+TEST_CASE("Under harsh nuisance the shelf is found whole: its top's columns scatter by a few pixels without ending it") {
+  // Mountings 4 and 6 at the harsh level (the bench's frames: layout seed 7): single columns' steps scatter by
+  // 3-5 px, and judged against the previous column alone the shelf top ended a few blocks in, its end was
+  // not seen and the board frame stayed as given (the true origin 0.45 and 0.14 block lengths off). Judged
+  // against the median of the last few columns the run goes on to the real end (measured: the origin within
+  // 0.0127 over 20 harsh mountings).
+  cal::CalibrationOptions options;
+  const auto steps = cal::calibration_steps(options);
+  for (const uint64_t seed : {uint64_t{4}, uint64_t{6}}) {
+    DYNAMIC_SECTION("mounting " << seed) {
+      const sim::CameraSetup camera = sim::CameraSetup::random(seed);
+      const sim::Renderer renderer(camera, sim::ProjectorSetup::random(seed));
+      sim::Nuisance harsh = sim::Nuisance::named("harsh");
+      harsh.layout_seed = 7;
+      const auto result = cal::compute_calibration(capture(renderer, steps, harsh, seed), options, 1);
+      INFO(result.message << "; shelf: " << result.shelf.message);
+      REQUIRE(result.status == cal::CalibrationStatus::kOk);
+      CHECK(result.shelf.found);
+      const cv::Point2d origin = board::camera_to_board(
+          result.calibration, sim::rectified_to_camera(camera, {camera.board.edge_x_px, camera.board.surface_y_px}));
+      INFO("the true origin maps to " << origin);
+      CHECK(cv::norm(origin) < 0.015);
+    }
+  }
+}
+
 namespace {
 // The setup the shelf sweep renders: a square projector (projector pixel = 1.6 rectified pixels, as
 // a squarely mounted one), a random camera pose and lens, and the shelf's top edge `below_px`

@@ -631,9 +631,18 @@ ShelfCorner find_shelf_corner(const cv::Mat& light, const BoardGeometry& nominal
   }
   // The shelf occupies the left part: its end is where the run of hits starting at the left stops.
   std::sort(hits.begin(), hits.end(), [](const Hit& p, const Hit& q) { return p.x < q.x; });
+  // A hit continues the run when it is near the run's last few hits' median height, not just the last hit's:
+  // under harsh noise single columns' steps scatter by 3-5 px, and a run broken at one of them ended the shelf
+  // a few blocks in (its end then not seen, the board frame left as given: the origin 0.14 block lengths off).
   std::vector<Hit> run;
+  auto recent_y = [&run]() {
+    std::vector<double> ys;
+    for (size_t i = run.size() > 5 ? run.size() - 5 : 0; i < run.size(); ++i) ys.push_back(run[i].y);
+    std::nth_element(ys.begin(), ys.begin() + ys.size() / 2, ys.end());
+    return ys[ys.size() / 2];
+  };
   for (const Hit& h : hits) {
-    if (!run.empty() && (h.x - run.back().x > 12 || std::abs(h.y - run.back().y) > 4)) {
+    if (!run.empty() && (h.x - run.back().x > 12 || std::abs(h.y - recent_y()) > 4)) {
       if (run.size() >= 10) break;  // the first long run is the shelf
       run.clear();
     }
