@@ -12,7 +12,14 @@
 // with the lean of the end lines (calibration/line_lean.h); --verbose also prints, per setup, the
 // correction the truth asks for next to the measured one.
 //
+// The blocks for the scale step: --layout apart (the earlier figures' bottom row, its last block beyond the
+// surface edge, where no block can stand), standing (every bottom-row block's middle over the surface) or
+// stairs (standing, the right-hand tower stepping out over the edge, balanced); --nudge moves them between
+// frames (0: standing still, as they do on the exhibit while the step measures); --frames as --scale-frames.
+// The floor line: the correction's form fitted to the truth itself, what no measurement from blocks beats.
+//
 //   bricklayer-bench-calibration [--setups 20] [--nuisance mild] [--gray-code] [--shelf-clearance 8]
+//                                [--towers 9] [--layout apart|standing|stairs] [--nudge 0.011] [--frames 10]
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -60,6 +67,8 @@ struct Stats {
   std::vector<double> band_refit[kBandCount], row_refit[kRowCount], cell_refit[kBandCount][kRowCount], whole_refit;
   std::vector<double> refit_bound_ratio, refit_bound_far, scale_error_first, scale_error_refit;
   int refit_failed = 0;
+  // The floor (ideal_correction): per x band and whole grid, with the shelf's origin as found and with it free.
+  std::vector<double> band_floor[kBandCount], whole_floor, band_floor_origin[kBandCount], whole_floor_origin;
 };
 
 
@@ -119,25 +128,78 @@ BoardXGrid board_x_grid(const calibration_t& c, const sim::CameraSetup& camera) 
   return g;
 }
 
-// Four blocks standing apart along the bottom row, nudged a little per frame, and one on top.
-core::Stack blocks_apart(int frame) {
-  const double d = 0.011 * frame;
+// The floor no correction from blocks can go below: the correction of bricklayer-calibrate's form (a, b, g, h)
+// fitted to the truth itself over the whole-board grid (board x error made linear: x_true (g x + h y + 1) =
+// a x + b y), and the same with the origin free too (an added x offset: what the shelf's origin leaves). What
+// remains is the calibration's own mapping error (the lens, the fit's bends) and, without the offset, the origin.
+BoardXGrid ideal_correction(const calibration_t& c, const sim::CameraSetup& camera, bool free_origin) {
+  std::vector<double> rows_a, rhs;
+  const int n = free_origin ? 5 : 4;
+  for (int r = 0; r <= 9; ++r) {
+    const double by = (r + 0.5) * camera.board.block_height_px / camera.board.block_length_px;
+    for (double bx = -5; bx <= 5 + 1e-9; bx += 0.25) {
+      const cv::Point2d p = sim::rectified_to_camera(camera, {camera.board.to_px_x(bx), camera.board.to_px_y(by)});
+      if (p.x < 2 || p.y < 2 || p.x > camera.size.width - 3 || p.y > camera.size.height - 3) continue;
+      const cv::Point2d m = board::camera_to_board(c, p);
+      rows_a.insert(rows_a.end(), {m.x, m.y, -m.x * bx, -m.y * bx});
+      if (free_origin) rows_a.push_back(1.0);
+      rhs.push_back(bx);
+    }
+  }
+  const cv::Mat A(static_cast<int>(rhs.size()), n, CV_64F, rows_a.data()), B(static_cast<int>(rhs.size()), 1, CV_64F, rhs.data());
+  cv::Mat v;
+  cv::solve(A, B, v, cv::DECOMP_SVD);
+  calibration_t out = cal::apply_frame_correction(c, v.at<double>(0), v.at<double>(2), v.at<double>(1), v.at<double>(3));
+  if (free_origin) {
+    // x' + t0: camera_to_board's first row gains t0 times its last.
+    for (int j = 0; j < 3; ++j) out.camera_to_board[j] += v.at<double>(4) * out.camera_to_board[6 + j];
+  }
+  return board_x_grid(out, camera);
+}
+
+// How far the blocks move between frames, block lengths (--nudge).
+double g_nudge = 0.011;
+
+// The bottom row's blocks, nudged a little per frame. "apart" (the layout of the earlier figures): -3.5, -2.1,
+// -0.7 and 0.6, the last wholly beyond the surface edge: a block there cannot stand (its centre is 1.1 out), so
+// it is a ruler no operator can lay. "standing": -4.7, -3.5, -2.1, -0.7, every centre over the surface.
+std::vector<core::Block> bottom_row(int frame, const std::string& layout) {
+  const double d = g_nudge * frame;
+  if (layout == "apart") return {{1, 0, -3.5 + d}, {2, 0, -2.1 - d}, {3, 0, -0.7 + d}, {4, 0, 0.6 - d}};
+  return {{1, 0, -4.7 - d}, {2, 0, -3.5 + d}, {3, 0, -2.1 - d}, {4, 0, -0.7 + d}};
+}
+
+// The bottom row and one on top (no towers).
+core::Stack blocks_apart(int frame, const std::string& layout) {
   core::Stack s;
-  s.blocks = {{1, 0, -3.5 + d}, {2, 0, -2.1 - d}, {3, 0, -0.7 + d}, {4, 0, 0.6 - d}, {5, 1, -3.2 + d}};
+  s.blocks = bottom_row(frame, layout);
+  s.blocks.push_back({5, 1, -3.2 + g_nudge * frame});
   return s;
 }
 
 // The same bottom row with two towers on it (--towers): on the blocks at -3.5 and -0.7, one block on
-// another up to row `top`, each a few hundredths off the one below as hands leave them.
-core::Stack towers(int frame, int top) {
-  const double d = 0.011 * frame;
+// another up to row `top`, each a few hundredths off the one below as hands leave them. With --layout
+// stairs the right-hand tower steps out to the right as it rises, balanced with a margin: each block
+// reaches out over the one below by `step` times what the harmonic stack allows (1/(2k) for the k-th block
+// from the top, where every upper part's centre of mass is at the edge of the block below it), and its bottom
+// block is placed so the whole column's centre of mass is 0.15 inside the surface edge (step 0.7: every
+// upper part's at least 0.15 inside the block below; the top block reaches 1.03).
+core::Stack towers(int frame, int top, const std::string& layout, double step = 0.7) {
+  const double d = g_nudge * frame;
   core::Stack s;
-  s.blocks = {{1, 0, -3.5 + d}, {2, 0, -2.1 - d}, {3, 0, -0.7 + d}, {4, 0, 0.6 - d}};
+  s.blocks = bottom_row(frame, layout);
+  const int n = top + 1;
+  std::vector<double> out(n, 0.0);
+  for (int row = 1; row <= top; ++row) out[row] = out[row - 1] + step / (2.0 * (n - row));
+  double mean = 0;
+  for (double o : out) mean += o / n;
+  const double base = -0.15 - 0.5 - mean + d;
+  if (layout == "stairs") s.blocks.back().x = base;
   int id = 5;
   for (int row = 1; row <= top; ++row) {
     const double jitter = 0.03 * ((row * 7) % 5 - 2) / 2.0;
     s.blocks.push_back({id++, row, -3.5 + d + jitter});
-    s.blocks.push_back({id++, row, -0.7 + d - jitter});
+    s.blocks.push_back({id++, row, layout == "stairs" ? base + out[row] : -0.7 + d - jitter});
   }
   return s;
 }
@@ -237,6 +299,10 @@ int Main(int argc, char** argv) {
   flags.add("shelf-clearance", "8", "camera px: markers with a corner this close to the shelf are left out (0 = keep all)");
   flags.add_bool("verbose", "print the board x error of every setup");
   flags.add("towers", "0", "blocks stand in two towers up to this row on the bottom row's blocks at -3.5 and -0.7 (0: the bottom row alone)");
+  flags.add("layout", "apart", "the bottom row: apart (-3.5 -2.1 -0.7 0.6, the last beyond the edge, where no block stands), standing (-4.7 -3.5 -2.1 -0.7), stairs (standing, the tower on -0.7 stepping out to the right, balanced)");
+  flags.add("step", "0.7", "--layout stairs: each block reaches out over the one below by this fraction of what the harmonic stack allows");
+  flags.add("nudge", "0.011", "block lengths the blocks move between frames (0: standing still, as on the exhibit while the step measures)");
+  flags.add("frames", "10", "camera frames of the blocks (bricklayer-calibrate --scale-frames)");
   flags.add("max-row", "12", "the second pass measures blocks on rows 0..this");
   flags.add_bool("gray-code", "also measure a dense Gray-code map (32 more frames per setup; slow)");
   if (!flags.parse(argc, argv)) return 0;
@@ -248,6 +314,14 @@ int Main(int argc, char** argv) {
   options.board_from_shelf = !flags.get_bool("no-shelf");
   options.shelf_clearance_camera_px = flags.get_double("shelf-clearance");
   const bool verbose = flags.get_bool("verbose");
+  const std::string layout = flags.get("layout");
+  if (layout != "apart" && layout != "standing" && layout != "stairs") {
+    std::fprintf(stderr, "--layout must be apart, standing or stairs, not %s\n", layout.c_str());
+    return 2;
+  }
+  const double step = flags.get_double("step");
+  g_nudge = flags.get_double("nudge");
+  const int frames_count = static_cast<int>(flags.get_int("frames"));
   const auto steps = cal::calibration_steps(options);
   Stats corners, centres, gray;
   int rejected = 0;
@@ -284,6 +358,8 @@ int Main(int argc, char** argv) {
       };
       corners.shelf_found.push_back(result.shelf.found ? 1 : 0);
       corners.origin.push_back(cv::norm(at(0, 0)));
+      if (verbose)
+        std::printf("seed %d: shelf %s; the true origin lands at (%.4f, %.4f)\n", seed, result.shelf.message.c_str(), at(0, 0).x, at(0, 0).y);
       double level = 0;
       for (double bx = -4; bx <= 4; bx += 1) level = std::max(level, std::abs(at(bx, 0).y));
       corners.level.push_back(level);
@@ -297,9 +373,15 @@ int Main(int argc, char** argv) {
       std::vector<cal::LineLean> leans;
       std::vector<cal::RefitFrame> stored;
       const double h = result.calibration.block_height;
-      for (int f = 0; f < 10; ++f) {
+      for (int f = 0; f < frames_count; ++f) {
         const int top = static_cast<int>(flags.get_int("towers"));
-        const cv::Mat frame = renderer.render(top > 0 ? towers(f, top) : blocks_apart(f), nuisance, nullptr, seed * 100 + 50 + f).bgr;
+        const core::Stack blocks = top > 0 ? towers(f, top, layout, step) : blocks_apart(f, layout);
+        if (seed == 1 && f == 0 && verbose) {
+          std::printf("layout:");
+          for (const core::Block& b : blocks.blocks) std::printf(" row %d %.3f..%.3f;", b.row, b.x, b.x + 1);
+          std::printf("\n");
+        }
+        const cv::Mat frame = renderer.render(blocks, nuisance, nullptr, seed * 100 + 50 + f).bgr;
         stored.push_back({frame, cv::Mat(), cv::Size()});
         const size_t before = meter.measured().size();
         meter.add(frame);
@@ -383,6 +465,15 @@ int Main(int argc, char** argv) {
           }
           for (int r = 0; r < kRowCount; ++r) corners.row_refit[r].push_back(g3.row[r]);
           corners.whole_refit.push_back(g3.whole);
+          const BoardXGrid floor = ideal_correction(result.calibration, camera, false);
+          const BoardXGrid floor_origin = ideal_correction(result.calibration, camera, true);
+          for (int b = 0; b < kBandCount; ++b)
+            corners.band_floor[b].push_back(floor.band[b]), corners.band_floor_origin[b].push_back(floor_origin.band[b]);
+          corners.whole_floor.push_back(floor.whole);
+          corners.whole_floor_origin.push_back(floor_origin.whole);
+          if (verbose)
+            std::printf("seed %d: floor (the correction fitted to the truth) whole %.4f, x +4..+5 %.4f; origin free too %.4f, %.4f; origin error %.4f\n",
+                        seed, floor.whole, floor.band[4], floor_origin.whole, floor_origin.band[4], corners.origin.back());
           corners.scale_error_refit.push_back(total.scale / t.at<double>(0, 0) - 1.0);
           const cal::BoardXAccuracy bound =
               refit ? cal::board_x_accuracy(refit->lengths.residual, refit->lean ? refit->lean->residual : -1.0, true)
@@ -485,6 +576,12 @@ int Main(int argc, char** argv) {
       for (int r = 0; r < kRowCount; ++r)
         std::printf("  row %d (x -5..5): %.4f / %.4f\n", kRows[r], percentile(corners.row_refit[r], 0.5), percentile(corners.row_refit[r], 0.99));
       std::printf("  whole board: %.4f / %.4f\n", percentile(corners.whole_refit, 0.5), percentile(corners.whole_refit, 0.99));
+      std::printf("the floor: the correction's form fitted to the truth (origin as the shelf set it / origin free too), median / p99:");
+      for (int b = 0; b < kBandCount; ++b)
+        std::printf("  x %+.0f..%+.0f %.4f / %.4f (%.4f / %.4f);", kBands[b][0], kBands[b][1], percentile(corners.band_floor[b], 0.5),
+                    percentile(corners.band_floor[b], 0.99), percentile(corners.band_floor_origin[b], 0.5), percentile(corners.band_floor_origin[b], 0.99));
+      std::printf("  whole %.4f / %.4f (%.4f / %.4f)\n", percentile(corners.whole_floor, 0.5), percentile(corners.whole_floor, 0.99),
+                  percentile(corners.whole_floor_origin, 0.5), percentile(corners.whole_floor_origin, 0.99));
       std::vector<double> abs_first, abs_refit;
       for (double e : corners.scale_error_first) abs_first.push_back(std::abs(e));
       for (double e : corners.scale_error_refit) abs_refit.push_back(std::abs(e));
