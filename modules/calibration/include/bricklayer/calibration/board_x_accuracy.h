@@ -24,7 +24,7 @@ struct BoardXAccuracy {
   double at(double x, double y) const;
 };
 
-inline constexpr double kAccuracyBase = 0.006;         // the origin's p99 from the shelf (mild), block lengths
+inline constexpr double kAccuracyBase = 0.008;         // the origin from the shelf: p99 0.006 (mild), 0.010 (strong), block lengths
 inline constexpr double kAccuracyScale = 0.0025;       // the scale and the keystone along the board, per block length out
 inline constexpr double kAccuracyLean = 0.006;         // shear and vertical keystone from bottom-row leans, per block length up
 inline constexpr double kAccuracyRows = 0.002;         // the vertical keystone from lengths on rows up the board, per block length up
