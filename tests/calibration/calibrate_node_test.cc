@@ -414,7 +414,7 @@ TEST_CASE("the calibrate node corrects the board scale from blocks standing apar
   CHECK(covered == points);
 }
 
-TEST_CASE("with towers of blocks on two bottom-row blocks the calibrate node's second pass measures every row: the whole board within 0.018, its stated bound covering it and narrower up the board; without them the first pass stands") {
+TEST_CASE("with towers of blocks on two bottom-row blocks the calibrate node's second pass measures every row: the whole board within 0.018, its stated bound covering it and narrower up the board, and without them the first pass stands") {
   // The scale step end to end as the operator runs it (the status page's "Correct the scale with blocks"):
   // the real simcam renders the blocks through mounting 4, standing still as they do on the exhibit, the real
   // projection node shows its light on them, CalibrateNode measures them. The towers reach row 9 (3.2 block
