@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <limits>
 #include <random>
@@ -127,7 +128,17 @@ TEST_CASE("the search gives the same stacks, to the last bit, on one thread and 
   planner::OverhangSearchOptions one, several;
   several.jobs = 3;
   // n = 10: past 8, where the brick-wall starts join (350 s under the sanitizers at 12, so not larger).
-  const auto a = planner::search_best_overhang(10, one);
+  // The beam (default: one stack of each overhang) never holds one stack twice over.
+  int beams = 0;
+  const auto a = planner::search_best_overhang(10, one, {}, [&](const planner::OverhangSearchState& state) {
+    ++beams;
+    INFO("n = " << state.best_per_n.size());
+    CHECK(!state.beam.empty());
+    CHECK(state.beam.size() <= 8);
+    for (size_t i = 0; i < state.beam.size(); ++i)
+      for (size_t j = 0; j < i; ++j) CHECK(std::abs(state.beam[i].overhang - state.beam[j].overhang) > 1e-9);
+  });
+  CHECK(beams == 9);
   const auto b = planner::search_best_overhang(10, several);
   REQUIRE(a.size() == b.size());
   for (size_t k = 0; k < a.size(); ++k) {
@@ -148,6 +159,68 @@ TEST_CASE("the search gives the same stacks, to the last bit, on one thread and 
   CHECK(less_one->overhang == less_several->overhang);
   REQUIRE(less_one->blocks.size() == less_several->blocks.size());
   for (size_t i = 0; i < less_one->blocks.size(); ++i) CHECK(less_one->blocks[i].x == less_several->blocks[i].x);
+}
+
+TEST_CASE("one-block moves give the same stacks on one thread and on several") {
+  // The moves run several at a time; the first improving one in the seeded order must still be the one taken.
+  planner::OverhangSearchOptions one, several;
+  one.moves = several.moves = 40;
+  several.jobs = 3;
+  const auto a = planner::search_best_overhang(9, one);
+  const auto b = planner::search_best_overhang(9, several);
+  REQUIRE(a.size() == b.size());
+  for (size_t k = 0; k < a.size(); ++k) {
+    INFO("n = " << k + 1);
+    CHECK(a[k].overhang == b[k].overhang);
+    REQUIRE(a[k].blocks.size() == b[k].blocks.size());
+    for (size_t i = 0; i < a[k].blocks.size(); ++i) CHECK(a[k].blocks[i].x == b[k].blocks[i].x);
+  }
+}
+
+TEST_CASE("without a limit on alike stacks the beam fills with one stack's counterweights rearranged") {
+  // Why the limit exists: at n = 7 the eight layouts kept reach only six overhangs (n = 13: all eight the same
+  // stack, its top blocks arranged as 1,1,1 or 2,1 or 3).
+  planner::OverhangSearchOptions options;
+  options.alike = 0;
+  options.jobs = 2;
+  std::vector<double> beam;
+  planner::search_best_overhang(7, options, {}, [&](const planner::OverhangSearchState& state) {
+    beam.clear();
+    for (const auto& s : state.beam) beam.push_back(s.overhang);
+  });
+  REQUIRE(beam.size() == 8);
+  std::sort(beam.begin(), beam.end());
+  const auto distinct = std::unique(beam.begin(), beam.end(), [](double x, double y) { return std::abs(x - y) <= 1e-9; });
+  CHECK(distinct - beam.begin() < 8);
+}
+
+TEST_CASE("from variety_from on, the beam also keeps the best layout of load rows it lacks") {
+  // The row of the rightmost block (the load point): stacks with it higher start behind and overtake later.
+  auto load_row = [](const planner::OverhangStack& s) {
+    return std::max_element(s.blocks.begin(), s.blocks.end(), [](const auto& a, const auto& b) { return a.x < b.x; })->row;
+  };
+  planner::OverhangSearchOptions options;
+  options.jobs = 2;
+  options.variety = 3;
+  options.variety_from = 9;
+  int widened = 0;
+  planner::search_best_overhang(10, options, {}, [&](const planner::OverhangSearchState& state) {
+    const size_t n = state.best_per_n.size();
+    INFO("n = " << n);
+    if (n < 9) {
+      CHECK(state.beam.size() <= 8);
+      return;
+    }
+    REQUIRE(state.beam.size() <= 8 + 3);
+    std::set<int> rows;
+    for (size_t i = 0; i < std::min<size_t>(8, state.beam.size()); ++i) rows.insert(load_row(state.beam[i]));
+    for (size_t i = 8; i < state.beam.size(); ++i) {
+      CHECK(rows.insert(load_row(state.beam[i])).second);  // a row none before it has
+      CHECK(state.beam[i].overhang <= state.beam[7].overhang);
+      ++widened;
+    }
+  });
+  CHECK(widened > 0);
 }
 
 TEST_CASE("one block less: the shipped 23-block stack minus a block is the shipped 22-block optimum") {

@@ -48,7 +48,7 @@ TEST_CASE("a run continued from its checkpoint writes the files of a run that wa
   CHECK(table.at("4").get<double>() == Approx(1.167893).margin(1e-6));
 }
 
-TEST_CASE("a checkpoint is continued only under the options that made it; a broken one is refused") {
+TEST_CASE("a checkpoint is continued only under the options that made it, and a broken one is refused") {
   harness::ScratchDir dir("overhang-refused");
   REQUIRE(table_run(dir, {"--max-n", "5"}).status.code == 0);
   const std::string table = harness::read_file(dir / "table.json");

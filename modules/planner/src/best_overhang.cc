@@ -648,8 +648,9 @@ std::vector<int> movable_blocks(const std::vector<PlacedBlock>& blocks) {
 // Paterson & Zwick's local improvement over combinatorial types: take one block away (an end of a row) and
 // put it anywhere one more block could go, re-optimise from the current positions (nearly balanced, so
 // each try is cheap), keep the first improvement and start again; at most budget optimisations, in a seeded
-// order.
-OverhangStack improve_by_moves(OverhangStack best, int budget, double tolerance, std::mt19937_64& rng) {
+// order. The tries run jobs at a time; the first improving one in the seeded order is taken and the tries
+// after it count as unspent, so the answer is the one-thread answer.
+OverhangStack improve_by_moves(OverhangStack best, int budget, double tolerance, std::mt19937_64& rng, int jobs) {
   bool improved = true;
   while (improved && budget > 0) {
     improved = false;
@@ -670,13 +671,19 @@ OverhangStack improve_by_moves(OverhangStack best, int budget, double tolerance,
       }
     }
     std::shuffle(tries.begin(), tries.end(), rng);
-    for (const auto& layout : tries) {
-      if (budget-- <= 0) break;
-      auto result = optimise_layout(layout, rightmost(layout), tolerance);
-      if (result && result->overhang > best.overhang + 1e-9) {
-        best = *result;
-        improved = true;
-        break;
+    const size_t batch = static_cast<size_t>(std::max(1, jobs));
+    for (size_t start = 0; start < tries.size() && budget > 0 && !improved; start += batch) {
+      const size_t count = std::min({batch, tries.size() - start, static_cast<size_t>(budget)});
+      const std::vector<std::vector<PlacedBlock>> some(tries.begin() + static_cast<long>(start),
+                                                       tries.begin() + static_cast<long>(start + count));
+      const auto results = optimise_layouts(some, tolerance, jobs);
+      for (size_t k = 0; k < count; ++k) {
+        --budget;
+        if (results[k] && results[k]->overhang > best.overhang + 1e-9) {
+          best = *results[k];
+          improved = true;
+          break;
+        }
       }
     }
   }
@@ -689,6 +696,44 @@ OverhangStack with_surface_block(OverhangStack s) {
   for (const PlacedBlock& b : s.blocks) left = std::min(left, b.x);
   s.blocks.insert(s.blocks.begin(), PlacedBlock{0, left - 2.0});
   return s;
+}
+
+}  // namespace
+
+namespace {
+
+// The stacks of a ranking (best first), at most kept of each overhang (equal to 1e-9); kept 0 keeps all.
+std::vector<OverhangStack> few_alike(const std::vector<OverhangStack>& ranked, int kept) {
+  if (kept <= 0) return ranked;
+  std::vector<OverhangStack> out;
+  for (const OverhangStack& s : ranked) {
+    const auto alike = std::count_if(out.begin(), out.end(), [&](const OverhangStack& o) {
+      return std::abs(o.overhang - s.overhang) <= 1e-9;
+    });
+    if (alike < kept) out.push_back(s);
+  }
+  return out;
+}
+
+// The row of a stack's rightmost block (its load point: what is above it is counterweight).
+int principal_row(const OverhangStack& s) {
+  const PlacedBlock* right = &s.blocks.front();
+  for (const PlacedBlock& b : s.blocks)
+    if (b.x > right->x) right = &b;
+  return right->row;
+}
+
+// Up to `extra` more layouts for the beam from the ranking (best first), each the best one whose rightmost
+// block is on a row none in the beam has: stacks whose load sits higher grow faster but start behind, so a
+// beam of the best few alone drops them before they overtake.
+void add_variety(const std::vector<OverhangStack>& ranked, int extra, std::vector<OverhangStack>& beam) {
+  std::set<int> rows;
+  for (const OverhangStack& s : beam) rows.insert(principal_row(s));
+  for (size_t i = beam.size(); i < ranked.size() && extra > 0; ++i)
+    if (rows.insert(principal_row(ranked[i])).second) {
+      beam.push_back(ranked[i]);
+      --extra;
+    }
 }
 
 }  // namespace
@@ -783,7 +828,7 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
       consider(seeds);
     }
     // Seeded restarts around the best few.
-    std::vector<OverhangStack> ranked = ranked_candidates();
+    std::vector<OverhangStack> ranked = few_alike(ranked_candidates(), options.alike);
     {
       std::normal_distribution<double> noise(0.0, 0.08);
       const size_t top_few = std::min<size_t>(ranked.size(), 2);
@@ -796,7 +841,7 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
         }
       consider(seeds);
     }
-    ranked = ranked_candidates();
+    ranked = few_alike(ranked_candidates(), options.alike);
     // Polish the best: positions moved, so rebuild the contact set from them and optimise again.
     for_each_index(std::min<size_t>(ranked.size(), options.beam), options.jobs, [&](size_t i) {
       for (int round = 0; round < 3; ++round) {
@@ -816,10 +861,12 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
       ranked.insert(at, fallback);
     }
     if (options.moves > 0 && n >= 4) {
-      OverhangStack moved = improve_by_moves(ranked.front(), options.moves, options.tolerance, rng);
+      OverhangStack moved = improve_by_moves(ranked.front(), options.moves, options.tolerance, rng, options.jobs);
       if (moved.overhang > ranked.front().overhang) ranked.insert(ranked.begin(), moved);
     }
+    ranked = few_alike(ranked, options.alike);
     beam.assign(ranked.begin(), ranked.begin() + std::min<size_t>(ranked.size(), options.beam));
+    if (n >= options.variety_from) add_variety(ranked, options.variety, beam);
     best_per_n.push_back(beam.front());
     if (options.shrink) {
       // Back down: the best n stack minus a block may beat the best n-1 one, and that one minus a block the

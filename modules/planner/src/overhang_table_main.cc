@@ -76,13 +76,21 @@ int Main(int argc, char** argv) {
               "positions and contact forces, beam search over layouts) and writes the table and the stacks as JSON.\n"
               "After every n it also writes --checkpoint; --continue goes on from there after an interruption and\n"
               "writes the same files as a run that was never stopped.");
-  flags.add("max-n", "30", "largest number of blocks");
-  flags.add("beam", "8", "layouts kept per n");
-  flags.add("perturbations", "4", "seeded restarts around the best layouts per n");
-  flags.add("wall-seeds", "6", "seeded brick-wall start layouts per n (n >= 8)");
-  flags.add("shrink", "true", "after each n, try the best n stack minus each block as the n-1 stack (and on down)");
-  flags.add("moves", "0", "local improvement: one-block moves re-optimised per n (0 = off)");
-  flags.add("seed", "1", "random seed of the restarts");
+  const planner::OverhangSearchOptions defaults;  // the flags' defaults are the library's
+  auto text = [](auto v) { return std::to_string(v); };
+  flags.add("max-n", "60", "largest number of blocks");
+  flags.add("beam", text(defaults.beam), "layouts kept per n");
+  flags.add("alike", text(defaults.alike),
+            "of layouts with the same overhang, at most this many in the beam and the restarts (0 = no limit)");
+  flags.add("variety", text(defaults.variety),
+            "more layouts in the beam: the best of each row of the rightmost block the beam lacks, up to this many");
+  flags.add("variety-from", text(defaults.variety_from), "the n from which --variety applies");
+  flags.add("perturbations", text(defaults.perturbations), "seeded restarts around the best layouts per n");
+  flags.add("wall-seeds", text(defaults.wall_seeds), "seeded brick-wall start layouts per n (n >= 8)");
+  flags.add("shrink", defaults.shrink ? "true" : "false",
+            "after each n, try the best n stack minus each block as the n-1 stack (and on down)");
+  flags.add("moves", text(defaults.moves), "local improvement: one-block moves re-optimised per n (0 = off)");
+  flags.add("seed", text(defaults.seed), "random seed of the restarts");
   flags.add("table", "best_overhang.json", "output: {\"n\": overhang} in block lengths");
   flags.add("stacks", "best_overhang_stacks.json", "output: the stacks ({\"n\": [{\"row\", \"x\"}...]})");
   flags.add("checkpoint", "best_overhang_checkpoint.json", "output after every n: where the search stands (for --continue)");
@@ -99,13 +107,16 @@ int Main(int argc, char** argv) {
   if (max_n < 1 || max_n > 60) throw FlagError("--max-n must be between 1 and 60");
   planner::OverhangSearchOptions options;
   options.beam = static_cast<int>(flags.get_int("beam"));
+  options.alike = static_cast<int>(flags.get_int("alike"));
+  options.variety = static_cast<int>(flags.get_int("variety"));
+  options.variety_from = static_cast<int>(flags.get_int("variety-from"));
   options.perturbations = static_cast<int>(flags.get_int("perturbations"));
   options.wall_seeds = static_cast<int>(flags.get_int("wall-seeds"));
   options.moves = static_cast<int>(flags.get_int("moves"));
   options.shrink = flags.get_bool("shrink");
   options.seed = static_cast<uint64_t>(flags.get_int("seed"));
-  if (options.beam < 1 || options.perturbations < 0 || options.wall_seeds < 0 || options.moves < 0)
-    throw FlagError("--beam must be >= 1; --perturbations, --wall-seeds and --moves >= 0");
+  if (options.beam < 1 || options.alike < 0 || options.variety < 0 || options.perturbations < 0 || options.wall_seeds < 0 || options.moves < 0)
+    throw FlagError("--beam must be >= 1; --alike, --variety, --perturbations, --wall-seeds and --moves >= 0");
   const int64_t jobs = flags.get_int("jobs");
   if (jobs < 0 || jobs > 256) throw FlagError("--jobs must be between 0 and 256");
   options.jobs = jobs > 0 ? static_cast<int>(jobs) : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -122,6 +133,9 @@ int Main(int argc, char** argv) {
   // What shapes the answer (not --jobs, --max-n or the file names): a checkpoint is continued only under the
   // same, or the continued run would not be the uninterrupted one.
   nlohmann::ordered_json shaping = {{"beam", options.beam},
+                                    {"alike", options.alike},
+                                    {"variety", options.variety},
+                                    {"variety-from", options.variety_from},
                                     {"perturbations", options.perturbations},
                                     {"wall-seeds", options.wall_seeds},
                                     {"shrink", options.shrink},

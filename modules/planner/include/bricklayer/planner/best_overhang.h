@@ -64,6 +64,17 @@ struct OverhangSearchState {
 
 struct OverhangSearchOptions {
   int beam = 8;           // layouts kept per n
+  // Of layouts reaching the same overhang (to 1e-9), at most this many go into the beam and the restarts
+  // (0: no limit). Without it the beam held one stack eight times over: the same blocks below the load, the
+  // counterweights on top arranged differently (1,1,1 or 2,1 or 3 blocks), every copy the same overhang.
+  int alike = 1;
+  // From n = variety_from on, up to this many more layouts join the beam: the best of each row of the
+  // rightmost block (the load point) that the beam does not have yet. Without them every layout in the beam
+  // had its load on one row (row 9 at n = 40), and stacks with their load higher, which start behind and
+  // overtake from about n = 42, were dropped (the search fell behind the table from n = 45). From 41: below,
+  // the narrower beam already reaches the published optima, and each of these layouts costs time at every n.
+  int variety = 4;
+  int variety_from = 41;
   int perturbations = 4;  // seeded random restarts around the best layouts per n
   int wall_seeds = 6;     // seeded brick-wall layouts with random row profiles per n (n >= 8)
   // After each n: the best n stack minus one block (each block tried, re-optimised) replaces the best n-1 one
