@@ -44,6 +44,8 @@ prediction_t verdict_for(const bricklayer::stack_t& s) {
     block_prediction_t v{};
     v.id = b.id;
     v.state = static_cast<int8_t>(b.state);
+    v.accel = b.accel;
+    v.alpha = b.alpha;
     m.blocks.push_back(v);
   }
   m.num_blocks = static_cast<int32_t>(m.blocks.size());
@@ -143,4 +145,29 @@ TEST_CASE("a pile whose top block tips off the edge: that block fell off, the on
   CHECK((decoded->end_state[0] == collapse_preview_t::END_UNTOUCHED ||
          decoded->end_state[0] == collapse_preview_t::END_AT_REST));
   CHECK(decoded->poses == preview->poses);
+}
+
+TEST_CASE("a block called stable starts the preview awake only when its acceleration is nonzero below the tolerance") {
+  // A block standing alone far from a tipping one: at rest in every model. Called stable with an acceleration of
+  // exactly zero it sleeps throughout; with 5e-7 (stable only within the annotator's 1e-6) it starts awake, as
+  // starts_awake says, and its end tells so.
+  CHECK_FALSE(planner::starts_awake(true, 0.0, 0.0));
+  CHECK_FALSE(planner::starts_awake(true, -1e-14, 2e-14));
+  CHECK(planner::starts_awake(true, 5e-7, 0.0));
+  CHECK(planner::starts_awake(true, 0.0, -1e-8));
+  CHECK(planner::starts_awake(false, 0.0, 0.0));
+  planner::PlannerLogic logic;
+  const auto stack = message({{0, -3.0}, {0, -0.2}}, 4);
+  logic.on_stack(stack);
+  prediction_t verdict = verdict_for(stack);
+  REQUIRE(verdict.blocks[0].state == block_prediction_t::STATE_STABLE);
+  REQUIRE(std::abs(verdict.blocks[0].accel) + std::abs(verdict.blocks[0].alpha) < 1e-9);
+  const auto asleep = logic.preview_for(verdict);
+  REQUIRE(asleep);
+  CHECK(asleep->end_state[0] == collapse_preview_t::END_UNTOUCHED);
+  verdict.blocks[0].accel = 5e-7;
+  const auto awake = logic.preview_for(verdict);
+  REQUIRE(awake);
+  CHECK(awake->end_state[0] != collapse_preview_t::END_UNTOUCHED);
+  CHECK(awake->end_state[1] == asleep->end_state[1]);
 }

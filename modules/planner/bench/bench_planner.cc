@@ -76,7 +76,8 @@ void time_preview(const core::Stack& stack, PreviewStats& stats) {
   input.block_height = stack.block_height;
   for (size_t i = 0; i < stack.blocks.size(); ++i) {
     const bool moving = p.blocks[i].state != core::BlockState::kStable;
-    input.blocks.push_back({stack.blocks[i].row, stack.blocks[i].x, moving});
+    input.blocks.push_back({stack.blocks[i].row, stack.blocks[i].x,
+                            planner::starts_awake(!moving, p.blocks[i].accel, p.blocks[i].alpha)});
     stats.moving += moving;
   }
   planner::CollapsePreview preview;

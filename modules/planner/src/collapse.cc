@@ -709,6 +709,11 @@ class Simulation {
 
 double seconds_per_time_unit(double block_length_m) { return std::sqrt(block_length_m / 9.81); }
 
+bool starts_awake(bool stable, double accel, double alpha) {
+  constexpr double kZeroAcceleration = 1e-9;  // far below the tolerance, far above the QP's rounding
+  return !stable || std::abs(accel) + 0.5 * std::abs(alpha) > kZeroAcceleration;
+}
+
 CollapsePreview simulate_collapse(const CollapseInput& input, const CollapseOptions& options) {
   check_options(input, options);
   return Simulation(input, options).run();

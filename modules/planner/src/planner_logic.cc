@@ -79,7 +79,7 @@ std::optional<collapse_preview_t> PlannerLogic::preview_for(const prediction_t& 
   for (const core::Block& b : stack.blocks) {
     bool moving = true;  // blocks the prediction does not mention are simulated
     for (const block_prediction_t& v : prediction.blocks)
-      if (v.id == b.id) moving = v.state != block_prediction_t::STATE_STABLE;
+      if (v.id == b.id) moving = starts_awake(v.state == block_prediction_t::STATE_STABLE, v.accel, v.alpha);
     input.blocks.push_back({b.row, (b.x - stack.table_edge) / stack.block_length, moving});
   }
   return to_message(simulate_collapse(input, config_.collapse), stack, prediction.utime, prediction.frame_number);
