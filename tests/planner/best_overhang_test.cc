@@ -120,7 +120,37 @@ TEST_CASE("from scratch, the default search reaches the shipped table at every n
     CHECK(best[n - 1].blocks.size() == static_cast<size_t>(n));
     CHECK(best[n - 1].overhang >= stacks.at(std::to_string(n)).at("overhang").get<double>() - 1e-6);
     CHECK(best[n - 1].residual < 1e-9);
+    CHECK(planner::annotator_balanced(best[n - 1]));
   }
+}
+
+TEST_CASE("the search writes a row only when the exact annotator calls it balanced") {
+  // A stack the optimiser balanced (LP residual 1e-14) that the annotator's default QP reads as moving (contacts
+  // overlapping by the 1e-4 minimum): annotator_balanced refuses it, and the row shipped for its n passes.
+  // Without the check a run shipped it as row 51.
+  const nlohmann::json fixture = load(std::string(BRICKLAYER_SOURCE_DIR) + "/tests/data/overhang_stack_read_moving.json");
+  planner::OverhangStack read_moving;
+  core::Stack stack;
+  int64_t id = 1;
+  for (const auto& b : fixture.at("blocks")) {
+    read_moving.blocks.push_back({b.at("row").get<int>(), b.at("x").get<double>()});
+    stack.blocks.push_back({id++, b.at("row").get<int>(), b.at("x").get<double>()});
+  }
+  REQUIRE(read_moving.blocks.size() == 51);
+  CHECK_FALSE(planner::annotator_balanced(read_moving));
+  CHECK_FALSE(core::predict(stack).balanced);
+  core::PredictOptions nlopt;
+  nlopt.qp = core::QpMethod::kNlopt;
+  CHECK(core::predict(stack, nlopt).balanced);  // the stack is balanced; the default QP's rounding is not
+  // The search later found another 51-block stack of the same overhang (to 1e-9) that the annotator reads
+  // balanced; that one is shipped.
+  const planner::OverhangStack shipped = shipped_stack(load(kData + "best_overhang_stacks.json"), 51);
+  CHECK(planner::annotator_balanced(shipped));
+  CHECK(shipped.overhang == Approx(fixture.at("overhang").get<double>()).margin(1e-9));
+  bool same_positions = true;
+  for (size_t i = 0; i < shipped.blocks.size(); ++i)
+    same_positions = same_positions && shipped.blocks[i].x == read_moving.blocks[i].x;
+  CHECK_FALSE(same_positions);
 }
 
 TEST_CASE("the search gives the same stacks, to the last bit, on one thread and on several") {

@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "bricklayer/core/predict.h"
 #include "bricklayer/core/program.h"
 
 namespace bricklayer::planner {
@@ -756,6 +757,13 @@ std::optional<OverhangStack> best_one_block_less(const OverhangStack& s, double 
   return best;
 }
 
+bool annotator_balanced(const OverhangStack& s) {
+  core::Stack stack;  // block length 1, edge at 0, height 1/3 (balance itself does not depend on the height)
+  int64_t id = 1;
+  for (const PlacedBlock& b : s.blocks) stack.blocks.push_back({id++, b.row, b.x});
+  return core::predict(stack).balanced;
+}
+
 std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchOptions& options,
                                                 const std::function<void(int, const OverhangStack&)>& progress,
                                                 const std::function<void(const OverhangSearchState&)>& checkpoint) {
@@ -867,14 +875,19 @@ std::vector<OverhangStack> search_best_overhang(int n_max, const OverhangSearchO
     ranked = few_alike(ranked, options.alike);
     beam.assign(ranked.begin(), ranked.begin() + std::min<size_t>(ranked.size(), options.beam));
     if (n >= options.variety_from) add_variety(ranked, options.variety, beam);
-    best_per_n.push_back(beam.front());
+    // The row is the best the exact annotator calls balanced (annotator_balanced). The beam, which the next n
+    // grows, stays as ranked: a stack the optimiser balanced is still a good start. The fallback is balanced.
+    {
+      auto shown = std::find_if(ranked.begin(), ranked.end(), [](const OverhangStack& s) { return annotator_balanced(s); });
+      best_per_n.push_back(shown != ranked.end() ? *shown : with_surface_block(best_per_n.back()));
+    }
     if (options.shrink) {
       // Back down: the best n stack minus a block may beat the best n-1 one, and that one minus a block the
       // n-2 one, ... (only rows this run computed: resumed rows stay as given).
       int lowest = n;
       for (int k = n; k - 1 > first_new - 1 && k >= 2; --k) {
         auto smaller = best_one_block_less(best_per_n[k - 1], options.tolerance, options.jobs);
-        if (!smaller || smaller->overhang <= best_per_n[k - 2].overhang + 1e-9) break;
+        if (!smaller || smaller->overhang <= best_per_n[k - 2].overhang + 1e-9 || !annotator_balanced(*smaller)) break;
         best_per_n[k - 2] = *smaller;
         lowest = k - 1;
       }

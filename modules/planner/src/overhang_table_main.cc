@@ -73,7 +73,8 @@ void write_atomically(const std::string& path, const std::string& text) {
 int Main(int argc, char** argv) {
   Flags flags("bricklayer-overhang-table",
               "Searches the largest overhang of n = 1..--max-n blocks (sequential linear programming over block\n"
-              "positions and contact forces, beam search over layouts) and writes the table and the stacks as JSON.\n"
+              "positions and contact forces, beam search over layouts) and writes the table and the stacks as JSON;\n"
+              "a row is written only when the exact annotator reads its stack balanced (zero position tolerance).\n"
               "After every n it also writes --checkpoint; --continue goes on from there after an interruption and\n"
               "writes the same files as a run that was never stopped.");
   const planner::OverhangSearchOptions defaults;  // the flags' defaults are the library's

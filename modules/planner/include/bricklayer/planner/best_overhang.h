@@ -53,6 +53,13 @@ std::vector<std::vector<PlacedBlock>> wall_layouts(int n, int count, uint64_t se
 // jobs: optimisations run at once (the answer is the same for any value).
 std::optional<OverhangStack> best_one_block_less(const OverhangStack& s, double tolerance = 1e-9, int jobs = 1);
 
+// Whether the exact annotator (core::predict, zero position tolerance) calls stack s balanced. The search writes
+// a row only when it does: the optimiser's own check is its linear program (residual <= tolerance), and the
+// annotator's QP (NNLS on normal equations) can read a stack whose contacts overlap by the 1e-4 minimum as
+// moving at a few 1e-6 g (a 51-block stack of 3.310260: the LP residual 1e-14, the NLopt QP and the LP-first
+// check call it balanced, the default NNLS does not). The table promises stacks the display calls blue.
+bool annotator_balanced(const OverhangStack& s);
+
 // Where a search stands after an n: everything the next n depends on, so that a run stopped after any n and
 // continued from this state writes byte for byte the files of a run that was never stopped.
 struct OverhangSearchState {
