@@ -158,13 +158,13 @@ TEST_CASE("the preview's first step moves the blocks the exact annotator moves, 
       // The annotator may call a block a cause that does not move at all (README "First step"): it moves with
       // the rows under it held fixed, and the simulation frees those.
       causes_at_rest += v.state == core::BlockState::kCause && !exact_moves;
-      awake_within_tolerance += !exact_moves && planner::starts_awake(v.state == core::BlockState::kStable, v.accel, v.alpha);
       INFO(pile.name << " block " << i << " (row " << pile.stack.blocks[i].row << "): exact a " << v.accel << " alpha "
                      << v.alpha << ", first step " << a.x << ", " << a.y << ", " << a.angle);
       // The same blocks move, and up or down the same way, always; except that a sideways push may move a block
       // the annotator holds only within its tolerance (started awake: a nonzero acceleration below 1e-6).
       const bool held_within_tolerance =
-          !exact_moves && planner::starts_awake(v.state == core::BlockState::kStable, v.accel, v.alpha);
+          !exact_moves && v.state == core::BlockState::kStable && planner::starts_awake(true, v.accel, v.alpha);
+      awake_within_tolerance += held_within_tolerance;
       if (pushed_sideways && held_within_tolerance && moves(a.x, a.y, a.angle))
         ++pushed_within_tolerance;
       else
@@ -188,8 +188,8 @@ TEST_CASE("the preview's first step moves the blocks the exact annotator moves, 
   }
   std::printf("first step: %d unbalanced piles (%d blocks, %d moving), %d pushed sideways (%d moving blocks in them, %d of "
               "them turning where the annotator does not); worst difference without sideways pushes %.1e, worst vertical "
-              "difference with them %.3f; %d causes that do not move; %d blocks held within the tolerance (started awake), %d of them "
-              "pushed sideways\n",
+              "difference with them %.3f; %d causes that do not move; %d stable blocks held only within the tolerance "
+              "(started awake), %d of them pushed sideways\n",
               checked, blocks, moving, sideways_piles, sideways_blocks, sideways_turn_differs, worst, worst_sideways_y,
               causes_at_rest, awake_within_tolerance, pushed_within_tolerance);
   CHECK(checked >= 1000);
