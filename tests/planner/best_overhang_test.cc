@@ -34,13 +34,17 @@ double published(int n) {
   return fixture.at("max_overhang").at(std::to_string(n)).get<double>();
 }
 
-planner::OverhangStack shipped_stack(const nlohmann::json& stacks, int n) {
+// A stack as the stacks file holds it ({"overhang", "residual", "blocks": [{"row", "x"}...]}).
+planner::OverhangStack stack_from_json(const nlohmann::json& entry) {
   planner::OverhangStack s;
-  const auto& entry = stacks.at(std::to_string(n));
   s.overhang = entry.at("overhang").get<double>();
   s.residual = entry.at("residual").get<double>();
   for (const auto& b : entry.at("blocks")) s.blocks.push_back({b.at("row").get<int>(), b.at("x").get<double>()});
   return s;
+}
+
+planner::OverhangStack shipped_stack(const nlohmann::json& stacks, int n) {
+  return stack_from_json(stacks.at(std::to_string(n)));
 }
 
 int rightmost(const std::vector<planner::PlacedBlock>& blocks) {
@@ -128,14 +132,11 @@ TEST_CASE("the search writes a row only when the exact annotator calls it balanc
   // A stack the optimiser balanced (LP residual 1e-14) that the annotator's default QP reads as moving (contacts
   // overlapping by the 1e-4 minimum): annotator_balanced refuses it, and the row shipped for its n passes.
   // Without the check a run shipped it as row 51.
-  const nlohmann::json fixture = load(std::string(BRICKLAYER_SOURCE_DIR) + "/tests/data/overhang_stack_read_moving.json");
-  planner::OverhangStack read_moving;
+  const planner::OverhangStack read_moving =
+      stack_from_json(load(std::string(BRICKLAYER_SOURCE_DIR) + "/tests/data/overhang_stack_read_moving.json"));
   core::Stack stack;
   int64_t id = 1;
-  for (const auto& b : fixture.at("blocks")) {
-    read_moving.blocks.push_back({b.at("row").get<int>(), b.at("x").get<double>()});
-    stack.blocks.push_back({id++, b.at("row").get<int>(), b.at("x").get<double>()});
-  }
+  for (const planner::PlacedBlock& b : read_moving.blocks) stack.blocks.push_back({id++, b.row, b.x});
   REQUIRE(read_moving.blocks.size() == 51);
   CHECK_FALSE(planner::annotator_balanced(read_moving));
   CHECK_FALSE(core::predict(stack).balanced);
@@ -146,7 +147,7 @@ TEST_CASE("the search writes a row only when the exact annotator calls it balanc
   // balanced; that one is shipped.
   const planner::OverhangStack shipped = shipped_stack(load(kData + "best_overhang_stacks.json"), 51);
   CHECK(planner::annotator_balanced(shipped));
-  CHECK(shipped.overhang == Approx(fixture.at("overhang").get<double>()).margin(1e-9));
+  CHECK(shipped.overhang == Approx(read_moving.overhang).margin(1e-9));
   bool same_positions = true;
   for (size_t i = 0; i < shipped.blocks.size(); ++i)
     same_positions = same_positions && shipped.blocks[i].x == read_moving.blocks[i].x;
